@@ -1,0 +1,16 @@
+#include "core/logging.hpp"
+
+#include <spdlog/sinks/stdout_color_sinks.h>
+
+namespace builtscene {
+
+void init_logging(int verbosity) {
+  auto logger = spdlog::stderr_color_mt("builtscene");
+  logger->set_pattern("%^[%l]%$ %v");
+  logger->set_level(verbosity <= 0 ? spdlog::level::warn
+                    : verbosity == 1 ? spdlog::level::info
+                                     : spdlog::level::debug);
+  spdlog::set_default_logger(logger);
+}
+
+}  // namespace builtscene
