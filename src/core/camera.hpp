@@ -1,0 +1,46 @@
+#pragma once
+// Pinhole camera with radial-tangential (OpenCV / ORB-SLAM "k1 k2 p1 p2 k3") distortion,
+// plus the RGB-D settings that travel with it in camera.yaml.
+#include <filesystem>
+
+#include <Eigen/Core>
+
+namespace builtscene {
+
+struct PinholeCamera {
+  double fx = 0, fy = 0, cx = 0, cy = 0;
+  double k1 = 0, k2 = 0, p1 = 0, p2 = 0, k3 = 0;
+  int width = 0, height = 0;
+
+  bool has_distortion() const { return k1 != 0 || k2 != 0 || p1 != 0 || p2 != 0 || k3 != 0; }
+
+  // Camera frame: x right, y down, z forward. Projects with distortion applied.
+  Eigen::Vector2d project(const Eigen::Vector3d& p_c) const;
+  // Normalized undistorted coordinates (x/z, y/z) -> distorted normalized coordinates.
+  Eigen::Vector2d distort(const Eigen::Vector2d& xn) const;
+  // Inverse of distort by fixed-point iteration (converges for ordinary lens distortion).
+  Eigen::Vector2d undistort(const Eigen::Vector2d& xd) const;
+  // Pixel (distorted) -> undistorted pixel in the same intrinsics.
+  Eigen::Vector2d undistort_pixel(const Eigen::Vector2d& px) const;
+  // Pixel and depth (metres along z) -> camera-frame point; removes distortion.
+  Eigen::Vector3d unproject(const Eigen::Vector2d& px, double depth) const;
+  bool in_image(const Eigen::Vector2d& px, double border = 0.0) const;
+};
+
+struct RgbdCameraSettings {
+  PinholeCamera camera;
+  double fps = 30.0;
+  double bf = 40.0;                // baseline (m) times fx: the virtual stereo of RGB-D
+  double th_depth = 40.0;          // close/far threshold in baselines (ORB-SLAM ThDepth)
+  double depth_map_factor = 5000;  // depth PNG value per metre
+  bool rgb_order = true;           // Camera.RGB: 1 = images are RGB, 0 = BGR
+
+  double close_depth() const { return th_depth * bf / camera.fx; }
+};
+
+// Reads ORB-SLAM keys: Camera.fx fy cx cy k1 k2 p1 p2 [k3] width height [fps bf RGB],
+// [ThDepth], [DepthMapFactor]. Missing or invalid required keys name the file and key.
+RgbdCameraSettings load_camera_settings(const std::filesystem::path& path);
+void save_camera_settings(const std::filesystem::path& path, const RgbdCameraSettings& s);
+
+}  // namespace builtscene
