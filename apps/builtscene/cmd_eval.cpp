@@ -1,0 +1,84 @@
+// `builtscene eval ate` and `builtscene eval rpe`: trajectory accuracy against ground truth.
+#include <memory>
+
+#include "command_registry.hpp"
+#include "core/logging.hpp"
+#include "eval/trajectory_error.hpp"
+
+namespace builtscene::app {
+namespace {
+
+struct TrajectoryPairOptions {
+  std::string gt, est, align = "se3";
+  double max_diff = 0.02;
+  std::size_t delta = 1;
+  bool scale = false;
+};
+
+void add_pair_options(CLI::App& cmd, TrajectoryPairOptions& o) {
+  cmd.add_option("--gt", o.gt, "Ground-truth trajectory (TUM format)")->required();
+  cmd.add_option("--est", o.est, "Estimated trajectory (TUM format)")->required();
+  cmd.add_option("--max-diff", o.max_diff, "Largest timestamp difference for a pair, seconds")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+}
+
+nlohmann::json run_ate(const TrajectoryPairOptions& o) {
+  const Alignment align = parse_alignment(o.align);
+  const Trajectory gt = read_tum_trajectory(o.gt);
+  const Trajectory est = read_tum_trajectory(o.est);
+  const AteResult r = absolute_trajectory_error(gt, est, align, o.max_diff);
+  spdlog::info("ATE ({} alignment, {} pairs): rmse {:.4f} m, mean {:.4f} m, median {:.4f} m, max {:.4f} m",
+               to_string(align), r.stats.count, r.stats.rmse, r.stats.mean, r.stats.median, r.stats.max);
+  nlohmann::json j = to_json(r.stats);
+  j["align"] = to_string(align);
+  j["scale"] = r.est_to_gt.scale();
+  const auto& q = r.est_to_gt.rotation();
+  const auto& t = r.est_to_gt.translation();
+  j["transform"] = {{"t", {t.x(), t.y(), t.z()}}, {"q_xyzw", {q.x(), q.y(), q.z(), q.w()}}, {"scale", r.est_to_gt.scale()}};
+  j["gt_poses"] = gt.size();
+  j["est_poses"] = est.size();
+  return j;
+}
+
+nlohmann::json run_rpe(const TrajectoryPairOptions& o) {
+  const Trajectory gt = read_tum_trajectory(o.gt);
+  const Trajectory est = read_tum_trajectory(o.est);
+  const RpeResult r = relative_pose_error(gt, est, o.delta, o.max_diff, o.scale);
+  spdlog::info("RPE (delta {} frames, {} pairs): translation rmse {:.4f} m, rotation rmse {:.3f} deg", r.delta,
+               r.translation.count, r.translation.rmse, r.rotation.rmse);
+  nlohmann::json j = to_json(r.translation);
+  j["rotation_deg"] = to_json(r.rotation);
+  j["delta"] = r.delta;
+  return j;
+}
+
+const bool group = register_group("eval", "Accuracy evaluation against ground truth");
+
+const bool ate = register_command({
+    .path = {"eval", "ate"},
+    .description = "Absolute trajectory error after alignment (TUM RGB-D benchmark style)",
+    .setup = [](CLI::App& cmd) -> Action {
+      auto o = std::make_shared<TrajectoryPairOptions>();
+      add_pair_options(cmd, *o);
+      cmd.add_option("--align", o->align, "Alignment of the estimate: se3, sim3 or none")->capture_default_str();
+      return [o] { return run_ate(*o); };
+    },
+    .order = 60});
+
+const bool rpe = register_command({
+    .path = {"eval", "rpe"},
+    .description = "Relative pose error over a fixed frame offset",
+    .setup = [](CLI::App& cmd) -> Action {
+      auto o = std::make_shared<TrajectoryPairOptions>();
+      add_pair_options(cmd, *o);
+      cmd.add_option("--delta", o->delta, "Frame offset between the two poses of a relative motion")
+          ->capture_default_str()
+          ->check(CLI::PositiveNumber);
+      cmd.add_flag("--correct-scale", o->scale, "Scale the estimate by the sim3 alignment's scale first");
+      return [o] { return run_rpe(*o); };
+    },
+    .order = 61});
+
+}  // namespace
+}  // namespace builtscene::app
