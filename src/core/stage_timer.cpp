@@ -19,6 +19,23 @@ double quantile(std::vector<double> values, double q) {
   return values[lo] * (1.0 - frac) + values[hi] * frac;
 }
 
+StageTimer::StageTimer(const StageTimer& other) {
+  std::lock_guard lock(other.mutex_);
+  samples_ = other.samples_;
+}
+
+StageTimer& StageTimer::operator=(const StageTimer& other) {
+  if (this == &other) return *this;
+  std::map<std::string, std::vector<double>> copy;
+  {
+    std::lock_guard lock(other.mutex_);
+    copy = other.samples_;
+  }
+  std::lock_guard lock(mutex_);
+  samples_ = std::move(copy);
+  return *this;
+}
+
 void StageTimer::add(const std::string& stage, double ms) {
   std::lock_guard lock(mutex_);
   samples_[stage].push_back(ms);

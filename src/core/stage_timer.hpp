@@ -13,6 +13,10 @@ namespace builtscene {
 // Collects durations per named stage; thread-safe (one mutex, held only to append).
 class StageTimer {
  public:
+  StageTimer() = default;
+  StageTimer(const StageTimer& other);  // copies the samples under the other's lock
+  StageTimer& operator=(const StageTimer& other);
+
   void add(const std::string& stage, double ms);
 
   // {"stage": {"median": ms, "p95": ms, "mean": ms, "total": ms, "count": n}, ...}

@@ -1,0 +1,132 @@
+// `builtscene ogm build`: an occupancy grid map from a dataset and a trajectory;
+// `builtscene ogm compare`: score a map against a ground-truth map.
+#include <memory>
+
+#include <opencv2/imgcodecs.hpp>
+
+#include "command_registry.hpp"
+#include "core/errors.hpp"
+#include "core/logging.hpp"
+#include "ogm/map_comparison.hpp"
+#include "ogm/map_drawing.hpp"
+#include "ogm/map_server_io.hpp"
+#include "ogm/trajectory_mapping.hpp"
+
+namespace builtscene::app {
+namespace {
+
+struct BuildOptions {
+  std::string dataset, camera, poses, out, truth, png, model = "source";
+  TrajectoryMappingOptions mapping;
+};
+
+std::filesystem::path yaml_path(const std::string& out) {
+  std::filesystem::path p = out;
+  if (p.extension() != ".yaml") p += ".yaml";
+  return p;
+}
+
+nlohmann::json run_build(BuildOptions o) {
+  if (o.model == "source") o.mapping.mapper.model = OccupancyMapperOptions::Model::kSource;
+  else if (o.model == "inverse-sensor") o.mapping.mapper.model = OccupancyMapperOptions::Model::kInverseSensor;
+  else throw InputError("--model: unknown model '" + o.model + "' (expected source or inverse-sensor)");
+  const TumDataset ds = TumDataset::open(o.dataset, o.camera);
+  const Trajectory traj = read_tum_trajectory(o.poses);
+  const TrajectoryMappingResult r = build_map_from_trajectory(ds, traj, o.mapping);
+  const OccupancyGrid grid = r.mapper.grid();
+  const auto yaml = yaml_path(o.out);
+  save_map_server(grid, yaml);
+  auto state = yaml;
+  state.replace_extension(".state");
+  r.mapper.save_state(state);
+  const std::string png = o.png.empty() ? (std::filesystem::path(yaml).replace_extension(".png")).string() : o.png;
+  {
+    MapDrawing d(grid, 2);
+    d.trajectory(r.poses);
+    if (!r.poses.empty()) {
+      d.scan(r.poses.back(), r.last_scan);
+      d.robot(r.poses.back());
+    }
+    if (!cv::imwrite(png, d.image())) throw Failure(located(png, 0, "cannot write picture"));
+  }
+  const auto& Tg = r.frame.T_gw();
+  nlohmann::json j = {{"map", yaml.string()},
+                      {"state", state.string()},
+                      {"png", png},
+                      {"frames", ds.size()},
+                      {"scans", r.frames.size()},
+                      {"skipped_frames", r.skipped_frames},
+                      {"width", grid.width()},
+                      {"height", grid.height()},
+                      {"resolution", grid.resolution()},
+                      {"origin", {grid.origin().x(), grid.origin().y()}},
+                      {"world", o.mapping.world},
+                      {"ground_from_world",
+                       {{"t", {Tg.translation().x(), Tg.translation().y(), Tg.translation().z()}},
+                        {"q_xyzw", {Tg.rotation().x(), Tg.rotation().y(), Tg.rotation().z(), Tg.rotation().w()}}}},
+                      {"stage_ms", r.timer.summary()}};
+  if (!o.truth.empty()) {
+    const MapScore s = compare_maps(grid, load_map_server(o.truth));
+    j["score"] = to_json(s);
+    spdlog::info("against {}: occupied precision {:.3f}, recall {:.3f}, free agreement {:.3f}", o.truth,
+                 s.occupied_precision, s.occupied_recall, s.free_agreement);
+  }
+  spdlog::info("map {} ({} x {} cells) from {} scans; picture {}", yaml.string(), grid.width(), grid.height(),
+               r.frames.size(), png);
+  return j;
+}
+
+struct CompareOptions {
+  std::string map, truth;
+  int tolerance = 1;
+};
+
+nlohmann::json run_compare(const CompareOptions& o) {
+  const MapScore s = compare_maps(load_map_server(o.map), load_map_server(o.truth), o.tolerance);
+  spdlog::info("occupied precision {:.3f}, recall {:.3f}, free agreement {:.3f}", s.occupied_precision,
+               s.occupied_recall, s.free_agreement);
+  nlohmann::json j = to_json(s);
+  j["tolerance_cells"] = o.tolerance;
+  return j;
+}
+
+const bool group = register_group("ogm", "Occupancy grid maps from virtual laser scans");
+
+const bool build = register_command({
+    .path = {"ogm", "build"},
+    .description = "Build an occupancy grid map from a dataset and a trajectory (ground truth or SLAM)",
+    .setup = [](CLI::App& cmd) -> Action {
+      auto o = std::make_shared<BuildOptions>();
+      auto& m = o->mapping;
+      cmd.add_option("--dataset", o->dataset, "TUM-layout RGB-D folder")->required();
+      cmd.add_option("--camera", o->camera, "Camera settings (default DATASET/camera.yaml)");
+      cmd.add_option("--poses", o->poses, "Trajectory, TUM format, camera in world")->required();
+      cmd.add_option("--out", o->out, "Output map (MAP.yaml + MAP.pgm + MAP.state + MAP.png)")->required();
+      cmd.add_flag("--keyframes-only", m.keyframes_only, "Integrate only frames that moved enough (0.2 m / 15 deg)");
+      cmd.add_option("--world", m.world, "World frame of the trajectory: zup, camera or auto")->capture_default_str();
+      cmd.add_option("--camera-height", m.camera_height, "With --world camera: first camera above the floor, m")->capture_default_str();
+      cmd.add_option("--min-height", m.scan.min_height, "Scan band bottom above the floor, m")->capture_default_str();
+      cmd.add_option("--max-height", m.scan.max_height, "Scan band top above the floor, m")->capture_default_str();
+      cmd.add_option("--range-max", m.scan.range_max, "Largest scan range, m")->capture_default_str();
+      cmd.add_option("--resolution", m.mapper.resolution, "Cell size, m")->capture_default_str()->check(CLI::PositiveNumber);
+      cmd.add_option("--model", o->model, "Update model: source or inverse-sensor")->capture_default_str();
+      cmd.add_option("--truth", o->truth, "Ground-truth map_server YAML to score against");
+      cmd.add_option("--png", o->png, "Picture (default MAP.png)");
+      return [o] { return run_build(*o); };
+    },
+    .order = 30});
+
+const bool compare = register_command({
+    .path = {"ogm", "compare"},
+    .description = "Score an occupancy grid map against a ground-truth map",
+    .setup = [](CLI::App& cmd) -> Action {
+      auto o = std::make_shared<CompareOptions>();
+      cmd.add_option("--map", o->map, "Estimated map_server YAML")->required();
+      cmd.add_option("--truth", o->truth, "Ground-truth map_server YAML")->required();
+      cmd.add_option("--tolerance", o->tolerance, "Tolerance in cells")->capture_default_str()->check(CLI::NonNegativeNumber);
+      return [o] { return run_compare(*o); };
+    },
+    .order = 31});
+
+}  // namespace
+}  // namespace builtscene::app

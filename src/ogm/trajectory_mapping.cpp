@@ -1,0 +1,96 @@
+#include "ogm/trajectory_mapping.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <numbers>
+
+#include "core/errors.hpp"
+#include "core/logging.hpp"
+#include "core/progress.hpp"
+
+namespace builtscene {
+
+std::vector<std::size_t> select_by_motion(const std::vector<SE3>& poses, double translation, double rotation_deg) {
+  std::vector<std::size_t> keep;
+  for (std::size_t i = 0; i < poses.size(); ++i) {
+    if (keep.empty()) {
+      keep.push_back(i);
+      continue;
+    }
+    const SE3 d = poses[keep.back()].inverse() * poses[i];
+    const double angle = Eigen::AngleAxisd(d.rotation()).angle() * 180.0 / std::numbers::pi;
+    if (d.translation().norm() >= translation || angle >= rotation_deg) keep.push_back(i);
+  }
+  return keep;
+}
+
+TrajectoryMappingResult build_map_from_trajectory(const TumDataset& ds, const Trajectory& traj,
+                                                  const TrajectoryMappingOptions& o) {
+  TrajectoryMappingResult r{OccupancyGridMapper(o.mapper), GroundFrame(), {}, {}, {}, 0, {}};
+  // Pair every frame with a pose.
+  std::vector<double> frame_times, pose_times;
+  for (const auto& e : ds.entries()) frame_times.push_back(e.timestamp);
+  for (const auto& p : traj) pose_times.push_back(p.timestamp);
+  const auto pairs = associate_timestamps(frame_times, pose_times, o.max_difference);
+  if (pairs.empty())
+    throw InputError("no pose of the trajectory lies within " + std::to_string(o.max_difference) +
+                     " s of a frame of " + ds.root().string());
+  std::vector<std::size_t> frame_idx;
+  std::vector<SE3> poses;
+  for (const auto& [fi, ti] : pairs) {
+    frame_idx.push_back(fi);
+    poses.push_back(traj[ti].pose);
+  }
+  std::vector<std::size_t> use(poses.size());
+  for (std::size_t i = 0; i < use.size(); ++i) use[i] = i;
+  if (o.keyframes_only) use = select_by_motion(poses, o.keyframe_translation, o.keyframe_rotation_deg);
+
+  if (!parse_ground_frame(o.world, o.camera_height, r.frame)) {
+    // Estimate from up to 20 frames spread over the run.
+    std::vector<SE3> sample_poses;
+    std::vector<cv::Mat> sample_depths;
+    const std::size_t step = std::max<std::size_t>(1, use.size() / 20);
+    for (std::size_t k = 0; k < use.size(); k += step) {
+      try {
+        sample_depths.push_back(ds.load_depth(frame_idx[use[k]]));
+        sample_poses.push_back(poses[use[k]]);
+      } catch (const InputError&) {
+      }
+    }
+    r.frame = GroundFrame::estimate(sample_poses, sample_depths, ds.settings().camera);
+  }
+  const VirtualLaserScanner scanner(ds.settings().camera, o.scan);
+  Progress progress("ogm", use.size());
+  for (std::size_t k = 0; k < use.size(); ++k) {
+    const std::size_t fi = frame_idx[use[k]];
+    cv::Mat depth;
+    {
+      auto t = r.timer.scope("load_depth");
+      try {
+        depth = ds.load_depth(fi);
+      } catch (const InputError& e) {
+        ++r.skipped_frames;
+        spdlog::warn("skipping frame {}: {}", fi, e.what());
+        continue;
+      }
+    }
+    const SE3 T_gc = r.frame.camera_in_ground(poses[use[k]]);
+    LaserScan scan;
+    {
+      auto t = r.timer.scope("scan");
+      scan = scanner.scan(depth, T_gc, ds.entry(fi).timestamp);
+    }
+    const Pose2D p = r.frame.to_2d(poses[use[k]]);
+    {
+      auto t = r.timer.scope("integrate");
+      r.mapper.integrate({p, scan});
+    }
+    r.poses.push_back(p);
+    r.frames.push_back(fi);
+    r.last_scan = std::move(scan);
+    progress.update(k + 1);
+  }
+  return r;
+}
+
+}  // namespace builtscene

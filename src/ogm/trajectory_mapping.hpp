@@ -1,0 +1,45 @@
+#pragma once
+// Builds an occupancy grid from an RGB-D dataset and any trajectory of it (ground truth or a
+// SLAM's), so mapping can be used and tested apart from the SLAM: poses are associated with
+// frames by timestamp, optionally thinned to keyframes by motion, put in the ground frame,
+// and each frame's virtual scan is integrated.
+#include <string>
+#include <vector>
+
+#include "core/stage_timer.hpp"
+#include "io/trajectory.hpp"
+#include "io/tum_dataset.hpp"
+#include "ogm/ground_frame.hpp"
+#include "ogm/occupancy_grid_mapper.hpp"
+#include "ogm/virtual_laser_scanner.hpp"
+
+namespace builtscene {
+
+struct TrajectoryMappingOptions {
+  VirtualLaserScanOptions scan;
+  OccupancyMapperOptions mapper;
+  std::string world = "auto";        // zup | camera | auto (see GroundFrame)
+  double camera_height = 1.0;        // for world = camera: first camera above the floor
+  bool keyframes_only = false;       // integrate only frames that moved enough since the last one used
+  double keyframe_translation = 0.20;  // metres
+  double keyframe_rotation_deg = 15.0;
+  double max_difference = 0.02;      // seconds, pose-to-frame association
+};
+
+struct TrajectoryMappingResult {
+  OccupancyGridMapper mapper;
+  GroundFrame frame;
+  std::vector<Pose2D> poses;         // 2D pose of every integrated frame
+  std::vector<std::size_t> frames;   // dataset indices integrated
+  LaserScan last_scan;
+  std::size_t skipped_frames = 0;    // unreadable depth: counted and logged, not fatal
+  StageTimer timer;
+};
+
+// Frames kept when thinning by motion (the first always).
+std::vector<std::size_t> select_by_motion(const std::vector<SE3>& poses, double translation, double rotation_deg);
+
+TrajectoryMappingResult build_map_from_trajectory(const TumDataset& dataset, const Trajectory& trajectory,
+                                                  const TrajectoryMappingOptions& options);
+
+}  // namespace builtscene
