@@ -24,41 +24,50 @@ std::vector<std::size_t> select_by_motion(const std::vector<SE3>& poses, double 
   return keep;
 }
 
-TrajectoryMappingResult build_map_from_trajectory(const TumDataset& ds, const Trajectory& traj,
-                                                  const TrajectoryMappingOptions& o) {
-  TrajectoryMappingResult r{OccupancyGridMapper(o.mapper), GroundFrame(), {}, {}, {}, 0, {}};
-  // Pair every frame with a pose.
+PosedFrames associate_poses(const TumDataset& ds, const Trajectory& traj, double max_difference) {
   std::vector<double> frame_times, pose_times;
   for (const auto& e : ds.entries()) frame_times.push_back(e.timestamp);
   for (const auto& p : traj) pose_times.push_back(p.timestamp);
-  const auto pairs = associate_timestamps(frame_times, pose_times, o.max_difference);
+  const auto pairs = associate_timestamps(frame_times, pose_times, max_difference);
   if (pairs.empty())
-    throw InputError("no pose of the trajectory lies within " + std::to_string(o.max_difference) +
+    throw InputError("no pose of the trajectory lies within " + std::to_string(max_difference) +
                      " s of a frame of " + ds.root().string());
-  std::vector<std::size_t> frame_idx;
-  std::vector<SE3> poses;
+  PosedFrames out;
   for (const auto& [fi, ti] : pairs) {
-    frame_idx.push_back(fi);
-    poses.push_back(traj[ti].pose);
+    out.frames.push_back(fi);
+    out.poses.push_back(traj[ti].pose);
   }
+  return out;
+}
+
+GroundFrame resolve_ground_frame(const TumDataset& ds, const PosedFrames& posed, const std::string& world,
+                                 double camera_height) {
+  GroundFrame frame;
+  if (parse_ground_frame(world, camera_height, frame)) return frame;
+  std::vector<SE3> sample_poses;
+  std::vector<cv::Mat> sample_depths;
+  const std::size_t step = std::max<std::size_t>(1, posed.frames.size() / 20);
+  for (std::size_t k = 0; k < posed.frames.size(); k += step) {
+    try {
+      sample_depths.push_back(ds.load_depth(posed.frames[k]));
+      sample_poses.push_back(posed.poses[k]);
+    } catch (const InputError&) {
+      // an unreadable frame is skipped here; the mapping loop reports it
+    }
+  }
+  return GroundFrame::estimate(sample_poses, sample_depths, ds.settings().camera);
+}
+
+TrajectoryMappingResult build_map_from_trajectory(const TumDataset& ds, const Trajectory& traj,
+                                                  const TrajectoryMappingOptions& o) {
+  TrajectoryMappingResult r{OccupancyGridMapper(o.mapper), GroundFrame(), {}, {}, {}, 0, {}};
+  const PosedFrames posed = associate_poses(ds, traj, o.max_difference);
+  const auto& frame_idx = posed.frames;
+  const auto& poses = posed.poses;
   std::vector<std::size_t> use(poses.size());
   for (std::size_t i = 0; i < use.size(); ++i) use[i] = i;
   if (o.keyframes_only) use = select_by_motion(poses, o.keyframe_translation, o.keyframe_rotation_deg);
-
-  if (!parse_ground_frame(o.world, o.camera_height, r.frame)) {
-    // Estimate from up to 20 frames spread over the run.
-    std::vector<SE3> sample_poses;
-    std::vector<cv::Mat> sample_depths;
-    const std::size_t step = std::max<std::size_t>(1, use.size() / 20);
-    for (std::size_t k = 0; k < use.size(); k += step) {
-      try {
-        sample_depths.push_back(ds.load_depth(frame_idx[use[k]]));
-        sample_poses.push_back(poses[use[k]]);
-      } catch (const InputError&) {
-      }
-    }
-    r.frame = GroundFrame::estimate(sample_poses, sample_depths, ds.settings().camera);
-  }
+  r.frame = resolve_ground_frame(ds, posed, o.world, o.camera_height);
   const VirtualLaserScanner scanner(ds.settings().camera, o.scan);
   Progress progress("ogm", use.size());
   for (std::size_t k = 0; k < use.size(); ++k) {

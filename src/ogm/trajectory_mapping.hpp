@@ -36,6 +36,18 @@ struct TrajectoryMappingResult {
   StageTimer timer;
 };
 
+// Dataset frames paired one-to-one with the trajectory's poses by timestamp.
+struct PosedFrames {
+  std::vector<std::size_t> frames;  // dataset indices
+  std::vector<SE3> poses;           // T_wc in the trajectory's world
+};
+PosedFrames associate_poses(const TumDataset& dataset, const Trajectory& trajectory, double max_difference);
+
+// The ground frame named by `world` (zup | camera | auto), estimated from up to 20 of the
+// posed frames' depth images for auto.
+GroundFrame resolve_ground_frame(const TumDataset& dataset, const PosedFrames& posed, const std::string& world,
+                                 double camera_height);
+
 // Frames kept when thinning by motion (the first always).
 std::vector<std::size_t> select_by_motion(const std::vector<SE3>& poses, double translation, double rotation_deg);
 
