@@ -9,6 +9,7 @@
 #include <Eigen/Eigenvalues>
 
 #include "core/errors.hpp"
+#include "core/logging.hpp"
 
 namespace builtscene {
 
@@ -50,10 +51,26 @@ GroundFrame GroundFrame::estimate(const std::vector<SE3>& T_wc, const std::vecto
   }
   if (pts.size() < 100) throw InputError("ground frame: too few depth readings to find the floor; pass --world");
 
-  // RANSAC over planes whose normal is within 40 degrees of up0 and that lie at least 0.2 m
-  // below the lowest camera; the plane with most inliers (2 cm) is the floor.
+  // RANSAC over planes whose normal is within 40 degrees of up0, that lie at least 0.2 m
+  // below the lowest camera and that have at most 1 % of the points below them; the plane
+  // with most inliers (2 cm) is the floor.
+  // Hypotheses are drawn from the lowest fifth of the points along up0 (below the cameras),
+  // where the floor is; drawn from all points, a floor seen only at the image's bottom edge
+  // (a forward-looking robot camera) would almost never be sampled.
+  std::vector<std::size_t> low;
+  {
+    std::vector<double> h;
+    for (const auto& p : pts) h.push_back(up0.dot(p));
+    std::vector<double> sorted = h;
+    const auto q = sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 5);
+    std::nth_element(sorted.begin(), q, sorted.end());
+    for (std::size_t i = 0; i < pts.size(); ++i)
+      if (h[i] <= *q && h[i] < lowest_camera - 0.2) low.push_back(i);
+  }
+  if (low.size() < 3) throw InputError("ground frame: no depth readings below the cameras; pass --world");
   std::mt19937 rng(12345);
-  std::uniform_int_distribution<std::size_t> pick(0, pts.size() - 1);
+  std::uniform_int_distribution<std::size_t> pick_low(0, low.size() - 1);
+  auto pick = [&](std::mt19937& g) { return low[pick_low(g)]; };
   Eigen::Vector3d best_n = up0;
   double best_d = 0;
   std::size_t best_count = 0;
@@ -66,15 +83,22 @@ GroundFrame GroundFrame::estimate(const std::vector<SE3>& T_wc, const std::vecto
     if (n.dot(up0) < std::cos(40.0 * std::numbers::pi / 180.0)) continue;
     const double d = n.dot(a);  // plane: n.p = d
     if (d > lowest_camera - 0.2) continue;
-    std::size_t count = 0;
-    for (const auto& p : pts)
-      if (std::abs(n.dot(p) - d) < 0.02) ++count;
+    // The floor has (almost) nothing below it: this rejects planes that cut obliquely
+    // through walls and furniture, however many points they happen to graze.
+    std::size_t count = 0, below = 0;
+    for (const auto& p : pts) {
+      const double e = n.dot(p) - d;
+      if (std::abs(e) < 0.02) ++count;
+      else if (e < -0.05) ++below;
+    }
+    if (below > pts.size() / 100) continue;
     if (count > best_count) {
       best_count = count;
       best_n = n;
       best_d = d;
     }
   }
+  spdlog::debug("ground frame: {} points, floor plane n=({:.3f},{:.3f},{:.3f}) d={:.3f} with {} inliers", pts.size(), best_n.x(), best_n.y(), best_n.z(), best_d, best_count);
   if (best_count < 50) throw InputError("ground frame: no floor plane found in the depth images; pass --world");
   // Least-squares refinement on the inliers.
   Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
@@ -90,10 +114,11 @@ GroundFrame GroundFrame::estimate(const std::vector<SE3>& T_wc, const std::vecto
   if (up.dot(up0) < 0) up = -up;
   const double floor = up.dot(centroid);
 
-  // Ground x: the first camera's forward axis made horizontal (its x axis if it looks straight down).
-  const Eigen::Matrix3d R0 = T_wc.front().rotation_matrix();
-  Eigen::Vector3d fwd = R0.col(2) - up * up.dot(R0.col(2));
-  if (fwd.norm() < 1e-3) fwd = R0.col(0) - up * up.dot(R0.col(0));
+  // Ground x: the world's own x axis made horizontal, so that a map of a z-up world (or of a
+  // first-camera world, where this gives the source's x <- camera x, y <- camera z) overlays
+  // that world's maps cell for cell; the world's z axis if x is nearly vertical.
+  Eigen::Vector3d fwd = Eigen::Vector3d::UnitX() - up * up.x();
+  if (fwd.norm() < 0.3) fwd = Eigen::Vector3d::UnitZ() - up * up.z();
   const Eigen::Vector3d gx = fwd.normalized();
   const Eigen::Vector3d gy = up.cross(gx);
   Eigen::Matrix3d R;

@@ -6,8 +6,8 @@
 //   - a SLAM map whose world is its first camera (x right, y down, z forward): ground x from
 //     camera x, ground y from camera z, up = -y, floor `camera_height` below the first camera
 //     (the source's convention);
-//   - or estimated from the data (up from the cameras' mean down direction, floor from the
-//     depth points).
+//   - or estimated from the data: up and the floor from the dominant floor plane of the depth
+//     points (searched near the cameras' mean down direction), x from the world's x axis.
 #include <string>
 #include <vector>
 

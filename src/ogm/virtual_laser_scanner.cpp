@@ -1,6 +1,7 @@
 #include "ogm/virtual_laser_scanner.hpp"
 
 #include <cmath>
+#include <algorithm>
 #include <limits>
 #include <numbers>
 
@@ -55,6 +56,7 @@ LaserScan VirtualLaserScanner::scan(const cv::Mat& depth, const SE3& T_gc, doubl
   const float rmin2 = s.range_min * s.range_min, rmax2 = s.range_max * s.range_max;
   const float inv_inc = 1.0f / angle_increment_;
   const int stride = std::max(1, options_.pixel_stride);
+  std::vector<std::vector<float>> samples(options_.robust_nearest ? beams : 0);
   for (int v = 0; v < depth.rows; v += stride) {
     const float* drow = depth.ptr<float>(v);
     const cv::Vec2f* rrow = rays_.ptr<cv::Vec2f>(v);
@@ -71,9 +73,26 @@ LaserScan VirtualLaserScanner::scan(const cv::Mat& depth, const SE3& T_gc, doubl
       const float a = std::atan2(sy, sx);
       const int bin = static_cast<int>(std::lround((a - angle_min_) * inv_inc));
       if (bin < 0 || bin >= static_cast<int>(beams)) continue;
-      float& best = s.ranges[static_cast<std::size_t>(bin)];
       const float r = std::sqrt(r2);
-      if (r < best) best = r;
+      if (options_.robust_nearest) {
+        samples[static_cast<std::size_t>(bin)].push_back(r);
+      } else {
+        float& best = s.ranges[static_cast<std::size_t>(bin)];
+        if (r < best) best = r;
+      }
+    }
+  }
+  if (options_.robust_nearest) {
+    const auto k = static_cast<std::size_t>(std::max(1, options_.nearest_rank));
+    for (std::size_t b = 0; b < beams; ++b) {
+      auto& v = samples[b];
+      if (v.size() < k) continue;  // too little support for a return: no reading
+      std::sort(v.begin(), v.end());
+      const float r0 = v[k - 1];
+      const float width = static_cast<float>(options_.cluster_base + options_.cluster_quadratic * r0 * r0);
+      const auto end = std::upper_bound(v.begin(), v.end(), r0 + width);
+      const auto n = static_cast<std::size_t>(end - v.begin());
+      s.ranges[b] = v[n / 2];  // median of the nearest cluster (starting at the nearest sample)
     }
   }
   return s;

@@ -87,7 +87,9 @@ std::vector<PoseAndScan> corridor_scans() {
   // A robot driving along x in a corridor with walls at y = +-1 (10 cm thick), scanning ahead.
   const auto cam = kinect_camera();
   const std::vector<Box> walls{{{-1, 1.0, 0}, {12, 1.1, 2.5}}, {{-1, -1.1, 0}, {12, -1.0, 2.5}}, {{10, -1.1, 0}, {10.1, 1.1, 2.5}}};
-  const VirtualLaserScanner scanner(cam, {});
+  VirtualLaserScanOptions o;
+  o.range_max = 8.0;  // noise-free depth: the whole corridor is in range
+  const VirtualLaserScanner scanner(cam, o);
   std::vector<PoseAndScan> out;
   for (int i = 0; i < 16; ++i) {
     const double x = 0.25 * i;
