@@ -1,8 +1,11 @@
 // `builtscene eval ate` and `builtscene eval rpe`: trajectory accuracy against ground truth.
+#include <iostream>
 #include <memory>
 
 #include "command_registry.hpp"
+#include "core/errors.hpp"
 #include "core/logging.hpp"
+#include "eval/marker_evaluation.hpp"
 #include "eval/trajectory_error.hpp"
 
 namespace builtscene::app {
@@ -53,6 +56,27 @@ nlohmann::json run_rpe(const TrajectoryPairOptions& o) {
   return j;
 }
 
+struct MarkerEvalOptions {
+  std::string measured, truth, align = "3d", out;
+};
+
+nlohmann::json run_markers(const MarkerEvalOptions& o) {
+  const auto measured = read_marker_measurements(o.measured);
+  const auto truth = read_marker_truth(o.truth);
+  if (measured.empty()) throw InputError(o.measured + ": no marker measurements");
+  const MarkerEvaluation e = evaluate_markers(measured, truth, parse_marker_alignment(o.align));
+  for (int id : e.unknown_ids) spdlog::warn("{}: marker id {} is not in {}; its measurements are ignored", o.measured, id, o.truth);
+  for (int id : e.unseen_ids) spdlog::warn("marker {} of {} was never measured", id, o.truth);
+  if (!o.out.empty()) {
+    write_marker_tables(e, o.out);
+    spdlog::info("tables and plot written to {}", o.out);
+  }
+  std::cerr << markers_markdown(e);
+  spdlog::info("{} measurements of {} markers: max position RMSE {:.3f} m, max distance RMSE {:.3f} m", e.measurements_used,
+               e.markers.size() - e.unseen_ids.size(), e.max_rmse, e.max_distance_rmse);
+  return to_json(e);
+}
+
 const bool group = register_group("eval", "Accuracy evaluation against ground truth");
 
 const bool ate = register_command({
@@ -79,6 +103,19 @@ const bool rpe = register_command({
       return [o] { return run_rpe(*o); };
     },
     .order = 61});
+
+const bool markers = register_command({
+    .path = {"eval", "markers"},
+    .description = "Marker-based accuracy: measured tag positions against surveyed ones (the source's Tables 2.1, 2.2)",
+    .setup = [](CLI::App& cmd) -> Action {
+      auto o = std::make_shared<MarkerEvalOptions>();
+      cmd.add_option("--measured", o->measured, "Measurements: frame,time,id,x,y,z,distance,angle_deg")->required();
+      cmd.add_option("--truth", o->truth, "Surveyed markers: id,x,y,z[,yaw,size]")->required();
+      cmd.add_option("--align", o->align, "Map-to-marker alignment: 3d, 2d or none")->capture_default_str();
+      cmd.add_option("--out", o->out, "Folder for markers.md, the CSV tables and markers.png");
+      return [o] { return run_markers(*o); };
+    },
+    .order = 62});
 
 }  // namespace
 }  // namespace builtscene::app
