@@ -91,21 +91,27 @@ std::vector<MarkerTruth> read_marker_truth(const std::filesystem::path& path) {
   return rows;
 }
 
-MarkerObserver::MarkerObserver(const PinholeCamera& camera, double tag_size, AprilTagOptions options,
-                               double max_distance, double max_reprojection_px)
+MarkerObserver::MarkerObserver(const PinholeCamera& camera, double default_size, std::map<int, double> sizes,
+                               AprilTagOptions options, double max_distance, double max_reprojection_px)
     : camera_(camera),
-      tag_size_(tag_size),
+      default_size_(default_size),
+      sizes_(std::move(sizes)),
       max_distance_(max_distance),
       max_reprojection_px_(max_reprojection_px),
       detector_(std::move(options)) {
-  if (!(tag_size > 0)) throw InputError("--tag-size must be positive");
+  if (!(default_size > 0) && sizes_.empty()) throw InputError("--tag-size must be positive (or give the sizes per marker)");
+  for (const auto& [id, s] : sizes_)
+    if (!(s > 0)) throw InputError("marker " + std::to_string(id) + ": size must be positive");
 }
 
 std::vector<MarkerMeasurement> MarkerObserver::observe(std::size_t frame, double time, const cv::Mat& image,
                                                        const cv::Mat& depth, const SE3& T_wc) const {
   std::vector<MarkerMeasurement> out;
   for (const auto& d : detector_.detect(image)) {
-    const auto pose = estimate_tag_pose(d, tag_size_, camera_, depth);
+    const auto it = sizes_.find(d.id);
+    const double size = it != sizes_.end() ? it->second : default_size_;
+    if (!(size > 0)) continue;
+    const auto pose = estimate_tag_pose(d, size, camera_, depth);
     if (!pose || pose->distance > max_distance_ || pose->reprojection_rms_px > max_reprojection_px_) continue;
     const SE3 T_wg = T_wc * pose->T_cg;
     out.push_back({frame, time, d.id, T_wg.translation(), pose->distance, pose->viewing_angle_deg});

@@ -4,6 +4,7 @@
 // from. CSV columns: frame,time,id,x,y,z,distance,angle_deg. Surveyed markers ("truth") use
 // the generated worlds' markers.csv columns: id,x,y,z,yaw,size.
 #include <filesystem>
+#include <map>
 #include <vector>
 
 #include "core/se3.hpp"
@@ -30,17 +31,21 @@ void write_marker_measurements(const std::filesystem::path& path, const std::vec
 std::vector<MarkerMeasurement> read_marker_measurements(const std::filesystem::path& path);
 std::vector<MarkerTruth> read_marker_truth(const std::filesystem::path& path);
 
-// Detects tags in a frame and turns them into map-frame measurements.
+// Detects tags in a frame and turns them into map-frame measurements. Tag sizes: per id
+// where given (e.g. from the survey's size column), else `default_size` (<= 0: such tags
+// are skipped, since their range would be wrong).
 class MarkerObserver {
  public:
-  MarkerObserver(const PinholeCamera& camera, double tag_size, AprilTagOptions options = {},
-                 double max_distance = 4.0, double max_reprojection_px = 2.0);
+  MarkerObserver(const PinholeCamera& camera, double default_size, std::map<int, double> sizes = {},
+                 AprilTagOptions options = {}, double max_distance = 4.0, double max_reprojection_px = 2.0);
   std::vector<MarkerMeasurement> observe(std::size_t frame, double time, const cv::Mat& image, const cv::Mat& depth,
                                          const SE3& T_wc) const;
 
  private:
   PinholeCamera camera_;
-  double tag_size_, max_distance_, max_reprojection_px_;
+  double default_size_;
+  std::map<int, double> sizes_;
+  double max_distance_, max_reprojection_px_;
   AprilTagDetector detector_;
 };
 
