@@ -16,6 +16,7 @@ struct Renderer::MipTexture {
   struct Level {
     int w, h;
     std::vector<float> bgr;  // w*h*3
+    bool pow2 = false;       // wrap with a mask instead of a modulo
   };
   std::vector<Level> levels;
 
@@ -23,7 +24,7 @@ struct Renderer::MipTexture {
     cv::Mat cur;
     img8.convertTo(cur, CV_32FC3);
     while (true) {
-      Level l{cur.cols, cur.rows, {}};
+      Level l{cur.cols, cur.rows, {}, (cur.cols & (cur.cols - 1)) == 0 && (cur.rows & (cur.rows - 1)) == 0};
       l.bgr.resize(static_cast<std::size_t>(cur.cols) * cur.rows * 3);
       for (int y = 0; y < cur.rows; ++y) std::memcpy(&l.bgr[static_cast<std::size_t>(y) * cur.cols * 3], cur.ptr<float>(y), sizeof(float) * 3 * cur.cols);
       levels.push_back(std::move(l));
@@ -42,7 +43,12 @@ struct Renderer::MipTexture {
     const float ax = x - fx0, ay = y - fy0;
     int x0 = static_cast<int>(fx0), y0 = static_cast<int>(fy0);
     int x1 = x0 + 1, y1 = y0 + 1;
-    if (wrap) {
+    if (wrap && L.pow2) {
+      x0 &= L.w - 1;
+      x1 &= L.w - 1;
+      y0 &= L.h - 1;
+      y1 &= L.h - 1;
+    } else if (wrap) {
       x0 = ((x0 % L.w) + L.w) % L.w;
       x1 = ((x1 % L.w) + L.w) % L.w;
       y0 = ((y0 % L.h) + L.h) % L.h;
@@ -200,7 +206,19 @@ void Renderer::render_rows(const SE3& T_cw, RenderOutput& out, int row_begin, in
   const Eigen::Vector3d t = T_cw.translation();
   constexpr double znear = 0.02;
 
+  // Front to back, so that the depth test rejects hidden pixels before they are shaded.
+  // Ties in distance keep the scene order, so the result is the same for every thread count.
+  const Eigen::Vector3d eye = -(R.transpose() * t);
+  std::vector<std::pair<double, std::size_t>> order(surfaces_.size());
   for (std::size_t si = 0; si < surfaces_.size(); ++si) {
+    const Surface& sf = surfaces_[si];
+    const Eigen::Vector3d d = eye - sf.origin;
+    const double a = std::clamp(d.dot(sf.u) / sf.u.squaredNorm(), 0.0, 1.0), b = std::clamp(d.dot(sf.v) / sf.v.squaredNorm(), 0.0, 1.0);
+    order[si] = {(sf.origin + sf.u * a + sf.v * b - eye).squaredNorm(), si};
+  }
+  std::sort(order.begin(), order.end());
+
+  for (const auto& [dist2, si] : order) {
     const Surface& sf = surfaces_[si];
     const Eigen::Vector3d o = R * sf.origin + t;
     const Eigen::Vector3d uc = R * sf.u, vc = R * sf.v;

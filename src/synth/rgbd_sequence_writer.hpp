@@ -23,7 +23,8 @@ struct RgbdSequenceOptions {
   bool kinect_noise = true;       // false: exact depth and noise-free colour
   bool exposure_changes = false;  // slow auto-exposure drift and steps
   double exposure_time_s = 0.02;  // shutter time for --blur
-  int render_threads = 1;         // the PNG encoder always runs on its own thread
+  int render_threads = 1;         // rendering threads (bands of rows)
+  int finish_threads = 2;         // sensor noise + PNG encoding threads (frames in parallel)
   int width = 640, height = 480;  // intrinsics scale with the size (tests use smaller images)
 };
 

@@ -18,7 +18,9 @@ class FrameRng {
     return z ^ (z >> 31);
   }
   float uniform() { return static_cast<float>(next() >> 40) * (1.0f / 16777216.0f); }
-  float gaussian();  // N(0, 1)
+  float gaussian();  // N(0, 1), smooth
+  // Four N(0, 1) values from one draw (65536 quantiles; coarser in the far tails).
+  void gaussian4(float* out);
 
  private:
   std::uint64_t s_;
