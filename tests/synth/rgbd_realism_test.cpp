@@ -16,7 +16,7 @@ namespace synth = builtscene::synth;
 namespace {
 
 struct Stats {
-  double features = 0, valid = 0, texture_fraction = 0;
+  double features = 0, valid = 0, texture_fraction = 0, fast20 = 0;
 };
 
 Stats measure(const bs::TumDataset& ds, std::size_t step, std::size_t count) {
@@ -29,6 +29,10 @@ Stats measure(const bs::TumDataset& ds, std::size_t step, std::size_t count) {
     std::vector<cv::KeyPoint> kps;
     orb->detect(gray, kps);
     s.features += static_cast<double>(kps.size());
+    // Uncapped texture density: FAST corners at ORB-SLAM's first threshold (20).
+    std::vector<cv::KeyPoint> corners;
+    cv::FAST(gray, corners, 20, true);
+    s.fast20 += static_cast<double>(corners.size());
     const cv::Mat d = ds.load_depth(i);
     s.valid += static_cast<double>(cv::countNonZero(d > 0)) / static_cast<double>(d.total());
     // Share of 16x16 cells with at least one ORB keypoint: how evenly texture is spread.
@@ -39,6 +43,7 @@ Stats measure(const bs::TumDataset& ds, std::size_t step, std::size_t count) {
   s.features /= static_cast<double>(n);
   s.valid /= static_cast<double>(n);
   s.texture_fraction /= static_cast<double>(n);
+  s.fast20 /= static_cast<double>(n);
   return s;
 }
 
@@ -58,6 +63,7 @@ TEST(RgbdRealism, LabRoomOrbAndValidDepthSameOrderAsSevenScenesKitchen) {
   const Stats kit = measure(bs::TumDataset::open(real), 20, 50);
   std::cerr << "ORB (1000 max) features/frame: lab-room " << gen.features << ", 7scenes-kitchen " << kit.features << "\n"
             << "valid depth fraction: lab-room " << gen.valid << ", 7scenes-kitchen " << kit.valid << "\n"
+            << "FAST-20 corners/frame: lab-room " << gen.fast20 << ", 7scenes-kitchen " << kit.fast20 << "\n"
             << "16x16 cells with a keypoint: lab-room " << gen.texture_fraction << ", 7scenes-kitchen " << kit.texture_fraction << "\n";
   RecordProperty("lab_orb", std::to_string(gen.features));
   RecordProperty("kitchen_orb", std::to_string(kit.features));
@@ -65,6 +71,8 @@ TEST(RgbdRealism, LabRoomOrbAndValidDepthSameOrderAsSevenScenesKitchen) {
   RecordProperty("kitchen_valid", std::to_string(kit.valid));
   EXPECT_GT(gen.features, kit.features / 3);
   EXPECT_LT(gen.features, kit.features * 3);
+  EXPECT_GT(gen.fast20, kit.fast20 / 3);
+  EXPECT_LT(gen.fast20, kit.fast20 * 3);
   EXPECT_GT(gen.valid, kit.valid / 3);
   EXPECT_LT(gen.valid, std::min(1.0, kit.valid * 3));
   std::filesystem::remove_all(o.out);
