@@ -119,7 +119,30 @@ inline float fast_log2(float x) {
   return e + (-0.34484843f * m + 2.02466578f) * m - 0.67487759f;
 }
 
-std::unique_ptr<Renderer::LightMap> compute_lightmap(const Surface& sf, const std::vector<Surface>& all, const Scene& scene) {
+// A surface reduced to what a shadow ray needs, precomputed once.
+struct Occluder {
+  Eigen::Vector3d o, n, uu, vv;  // origin, normal (unnormalized), u / |u|^2, v / |v|^2
+  double c;                      // n . o
+};
+
+// Does the segment q + t dir, t in (0, len), cross any surface?
+bool occluded(const std::vector<Occluder>& occ, const Eigen::Vector3d& q, const Eigen::Vector3d& dir, double len) {
+  for (const Occluder& s : occ) {
+    const double den = s.n.dot(dir);
+    if (std::abs(den) < 1e-15) continue;
+    const double t = (s.c - s.n.dot(q)) / den;
+    if (t <= 1e-4 || t >= len) continue;
+    const Eigen::Vector3d d = q + dir * t - s.o;
+    const double a = d.dot(s.uu), b = d.dot(s.vv);
+    if (a >= 0 && a <= 1 && b >= 0 && b <= 1) return true;
+  }
+  return false;
+}
+
+// Lights farther than this add less than ~0.03 to a surface's irradiance: ignored.
+constexpr double kLightRange = 9.0;
+
+std::unique_ptr<Renderer::LightMap> compute_lightmap(const Surface& sf, const std::vector<Occluder>& occ, const Scene& scene) {
   auto lm = std::make_unique<Renderer::LightMap>();
   const double lu = sf.u.norm(), lv = sf.v.norm();
   const double cell = std::max({0.15, lu / 160.0, lv / 160.0});
@@ -127,22 +150,27 @@ std::unique_ptr<Renderer::LightMap> compute_lightmap(const Surface& sf, const st
   lm->h = std::max(2, static_cast<int>(std::ceil(lv / cell)) + 1);
   lm->e.assign(static_cast<std::size_t>(lm->w) * lm->h, static_cast<float>(scene.ambient));
   const Eigen::Vector3d n = sf.v.cross(sf.u).normalized();  // the visible side
+  // Lights that can reach some part of this surface (in front of it, within range).
+  std::vector<const Light*> lights;
+  const Eigen::Vector3d centre = sf.origin + (sf.u + sf.v) / 2;
+  const double radius = (sf.u + sf.v).norm() / 2;
+  for (const Light& L : scene.lights)
+    if (n.dot(L.position - sf.origin) > 0 && (L.position - centre).norm() < kLightRange + radius) lights.push_back(&L);
   for (int j = 0; j < lm->h; ++j)
     for (int i = 0; i < lm->w; ++i) {
       const Eigen::Vector3d p = sf.origin + sf.u * (static_cast<double>(i) / (lm->w - 1)) + sf.v * (static_cast<double>(j) / (lm->h - 1));
       const Eigen::Vector3d q = p + n * 0.01;
       double e = scene.ambient;
-      for (const Light& L : scene.lights) {
-        const Eigen::Vector3d d = L.position - q;
+      for (const Light* L : lights) {
+        const Eigen::Vector3d d = L->position - q;
         const double dist2 = d.squaredNorm();
-        if (dist2 > 14.0 * 14.0) continue;
+        if (dist2 > kLightRange * kLightRange) continue;
         const double dist = std::sqrt(dist2);
         const double cosang = n.dot(d) / dist;
         if (cosang <= 0) continue;
-        const auto hit = raycast(all, q, d / dist, 1e-4);
-        if (hit && *hit < dist - 0.02) continue;  // in shadow
+        if (occluded(occ, q, d / dist, dist - 0.02)) continue;  // in shadow
         // Inverse square with a soft core so that surfaces next to a lamp do not blow out.
-        e += L.intensity * cosang / (dist2 + 0.5);
+        e += L->intensity * cosang / (dist2 + 0.5);
       }
       lm->e[static_cast<std::size_t>(j) * lm->w + i] = static_cast<float>(e);
     }
@@ -161,9 +189,14 @@ Renderer::Renderer(const Scene& scene, const PinholeCamera& camera) : camera_(ca
   for (const auto& s : surfaces_)
     if (s.material < 0 || s.material >= static_cast<int>(materials_.size())) throw Failure("scene " + scene.name + ": surface with a bad material");
   lightmaps_.resize(surfaces_.size());
+  std::vector<Occluder> occ;
+  for (const auto& sf : surfaces_) {
+    const Eigen::Vector3d nn = sf.u.cross(sf.v);
+    occ.push_back({sf.origin, nn, sf.u / sf.u.squaredNorm(), sf.v / sf.v.squaredNorm(), nn.dot(sf.origin)});
+  }
   // Light maps are independent per surface: compute them in two interleaved halves.
   auto work = [&](std::size_t first) {
-    for (std::size_t i = first; i < surfaces_.size(); i += 2) lightmaps_[i] = compute_lightmap(surfaces_[i], surfaces_, scene);
+    for (std::size_t i = first; i < surfaces_.size(); i += 2) lightmaps_[i] = compute_lightmap(surfaces_[i], occ, scene);
   };
   std::thread t(work, 1);
   work(0);
