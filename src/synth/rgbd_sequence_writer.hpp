@@ -1,0 +1,38 @@
+#pragma once
+// `builtscene synth rgbd`: renders a generated world along a camera motion and writes a TUM
+// RGB-D folder with exact ground truth (poses, tags, occupancy, geometry).
+#include <cstdint>
+#include <filesystem>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "core/camera.hpp"
+#include "synth/camera_motion.hpp"
+
+namespace builtscene::synth {
+
+struct RgbdSequenceOptions {
+  std::string scene = "demo";
+  std::filesystem::path out;
+  int frames = 0;                 // 0: the motion's default (handheld 300, robot: --loops loops)
+  std::uint64_t seed = 1;
+  MotionKind motion = MotionKind::Handheld;
+  int loops = 1;
+  bool blur = false;              // motion blur integrated over the exposure time
+  bool kinect_noise = true;       // false: exact depth and noise-free colour
+  bool exposure_changes = false;  // slow auto-exposure drift and steps
+  double exposure_time_s = 0.02;  // shutter time for --blur
+  int render_threads = 1;         // rendering threads (bands of rows)
+  int finish_threads = 2;         // sensor noise + PNG encoding threads (frames in parallel)
+  int width = 640, height = 480;  // intrinsics scale with the size (tests use smaller images)
+};
+
+// Kinect-like colour camera at the given size (525 px focal length at 640 x 480).
+RgbdCameraSettings kinect_settings(int width = 640, int height = 480);
+
+// Validates options (InputError naming the option or path), generates and writes the folder.
+// Returns the summary printed by --json.
+nlohmann::json generate_rgbd_sequence(const RgbdSequenceOptions& options);
+
+}  // namespace builtscene::synth
