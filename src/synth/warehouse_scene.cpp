@@ -392,6 +392,23 @@ bool WarehouseScene::legible(std::size_t l, int i) const {
   return light >= 0.3;
 }
 
+cv::Mat render_barcode(const std::string& text, const std::string& symbology, int module, int height_modules) {
+  if (module < 1 || module > 20) throw InputError("render_barcode: module must be 1..20 pixels");
+  int sym = 0;
+  std::string data = text;
+  if (symbology == "Code128") {
+    sym = BARCODE_CODE128;
+  } else if (symbology == "Code39") {
+    sym = BARCODE_CODE39;
+  } else if (symbology == "EAN-13") {
+    sym = BARCODE_EANX;
+    if (data.size() == 13) data = data.substr(0, 12);  // zint adds the check digit
+  } else {
+    throw InputError("render_barcode: unsupported symbology '" + symbology + "'");
+  }
+  return render_symbol(data, sym, static_cast<float>(module), static_cast<float>(height_modules));
+}
+
 WarehouseWriteResult write_warehouse_scan(const fs::path& dir, const WarehouseOptions& options) {
   const auto t0 = std::chrono::steady_clock::now();
   const WarehouseScene scene(options);

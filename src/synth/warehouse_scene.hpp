@@ -75,6 +75,11 @@ class WarehouseScene {
   cv::Rect2d content_;   // world area holding racks
 };
 
+// A 1D symbol rendered by libzint as an 8-bit gray image (black bars on white, quiet zones and
+// human-readable text included). symbology: "Code128", "Code39" or "EAN-13" (12 or 13 digits);
+// module: pixels per module (a multiple of 1). Throws InputError for other names or bad text.
+cv::Mat render_barcode(const std::string& text, const std::string& symbology, int module = 2, int height_modules = 30);
+
 // Renders the scan to DIR: scan.avi (or frames/NNNNNN.png), truth.csv, camera.csv.
 // Returns a summary: frames, labels, legible labels, seconds, files.
 struct WarehouseWriteResult {
