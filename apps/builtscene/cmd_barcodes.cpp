@@ -65,6 +65,9 @@ void add_stage_options(CLI::App& cmd, barcode::ScanOptions& o, std::string& deco
       ->capture_default_str();
   cmd.add_flag("--rotate,!--no-rotate", o.rotate, "Direction estimation and rotation for regions that fail")
       ->capture_default_str();
+  cmd.add_flag("--whole-frame,!--no-whole-frame", o.whole_frame,
+               "Decode the whole key frame too; regions only for what it misses")
+      ->capture_default_str();
   cmd.add_option("--decoder", decoder, "zxing, zbar or both")->capture_default_str();
   cmd.add_option("--threads", o.threads, "Worker threads (output does not depend on it)")->capture_default_str();
 }

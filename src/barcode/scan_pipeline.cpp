@@ -76,8 +76,9 @@ bool same(const DecodedSymbol& a, const DecodedSymbol& b) { return a.text == b.t
 
 }  // namespace
 
-std::vector<FrameRead> read_frame(const cv::Mat& frame, const StageSettings& settings, const Decoder& decoder,
-                                  bool rotate, bool decoder_only, int max_symbols, std::size_t* region_count) {
+std::vector<FrameRead> read_frame(const cv::Mat& frame, const StageSettings& settings, const DecoderSet& decoders,
+                                  bool rotate, bool decoder_only, bool whole_frame, int max_symbols,
+                                  std::size_t* region_count) {
   std::vector<FrameRead> reads;
   if (frame.empty()) return reads;
   cv::Mat gray;
@@ -86,10 +87,11 @@ std::vector<FrameRead> read_frame(const cv::Mat& frame, const StageSettings& set
   } else {
     gray = frame;
   }
-  if (decoder_only || !settings.regions) {
-    for (auto& s : decoder.decode(gray, max_symbols)) reads.push_back({s, symbol_box(s, gray.size()), false});
-    return reads;
+  if (decoder_only || !settings.regions || whole_frame) {
+    for (auto& s : decoders.whole.decode(gray, max_symbols)) reads.push_back({s, symbol_box(s, gray.size()), false});
+    if (decoder_only || !settings.regions) return reads;
   }
+  const std::size_t whole_reads = reads.size();
   const RegionDetector detector(settings.region);
   const auto regions = detector.detect(gray);
   if (region_count) *region_count += regions.size();
@@ -97,13 +99,19 @@ std::vector<FrameRead> read_frame(const cv::Mat& frame, const StageSettings& set
   for (const auto& region : regions) {
     const cv::Rect box = region.bounds(gray.size());
     if (box.width < 8 || box.height < 8) continue;
+    bool done = false;
+    for (std::size_t i = 0; i < whole_reads; ++i) {
+      const auto& c = reads[i].symbol.corners;
+      done = done || box.contains((c[0] + c[1] + c[2] + c[3]) * 0.25f);
+    }
+    if (done) continue;
     const cv::Mat crop = gray(box);
-    auto symbols = decoder.decode(crop, 1);
+    auto symbols = decoders.crop.decode(crop, 1);
     bool rotated = false;
     if (symbols.empty() && rotate) {
       const auto angle = estimator.scan_angle(crop);
       if (angle && std::min(*angle, 180.0 - *angle) > 3.0) {
-        symbols = decoder.decode(DirectionEstimator::upright(crop, *angle), 1);
+        symbols = decoders.crop.decode(DirectionEstimator::upright(crop, *angle), 1);
         rotated = true;
       }
     }
@@ -124,7 +132,7 @@ std::vector<FrameRead> read_frame(const cv::Mat& frame, const StageSettings& set
 }
 
 double calibrate_region_threshold(const std::vector<cv::Mat>& samples, const RegionOptions& base,
-                                  const Decoder& decoder, bool rotate, int threads) {
+                                  const DecoderSet& decoders, bool rotate, int threads) {
   const std::vector<double> candidates = {0.30, 0.40, 0.45, 0.50, 0.60, 0.70};
   std::vector<std::pair<std::size_t, std::size_t>> score(candidates.size());  // distinct, reads
   std::atomic<std::size_t> next{0};
@@ -137,7 +145,7 @@ double calibrate_region_threshold(const std::vector<cv::Mat>& samples, const Reg
       std::set<std::pair<std::string, std::string>> distinct;
       std::size_t reads = 0;
       for (const auto& f : samples)
-        for (const auto& r : read_frame(f, s, decoder, rotate, false, 1)) {
+        for (const auto& r : read_frame(f, s, decoders, rotate, false, false, 1)) {
           distinct.insert({r.symbol.text, r.symbol.symbology});
           ++reads;
         }
@@ -211,8 +219,12 @@ ScanResult scan(const fs::path& video, const ScanOptions& options) {
   StageSettings settings = parse_stage_settings(options);
   const bool use_keys = settings.keyframes && !options.decoder_only;
   const bool use_regions = settings.regions && !options.decoder_only;
-  // Whole frames get zxing's thorough search; region crops the quick one (see ZXingDecoder).
-  const auto decoder = make_decoder(options.decoder, /*thorough=*/!use_regions);
+  // Whole frames get zxing's thorough search (90-degree retry, downscaled pyramid), in the
+  // pipeline as in the baseline, so the pipeline reads every key frame at least as well as the
+  // decoder alone; region crops get the quick search (the pipeline turns them upright itself).
+  const auto whole_decoder = make_decoder(options.decoder, true);
+  const auto crop_decoder = make_decoder(options.decoder, false);
+  const DecoderSet decoders{*whole_decoder, *crop_decoder};
   StageTimer timer;
   ScanResult result;
   const int threads = std::max(1, options.threads);
@@ -301,7 +313,7 @@ ScanResult scan(const fs::path& video, const ScanOptions& options) {
     std::vector<cv::Mat> gray;
     for (const auto& f : samples) gray.push_back(decode_gray(f));
     settings.region.threshold = gray.empty() ? 0.45
-                                             : calibrate_region_threshold(gray, settings.region, *decoder,
+                                             : calibrate_region_threshold(gray, settings.region, decoders,
                                                                           options.rotate, threads);
     timer.add("calibrate", ms_since(ts));
     spdlog::info("barcodes: region threshold {:.2f} (chosen on {} sample frames)", settings.region.threshold,
@@ -320,7 +332,7 @@ ScanResult scan(const fs::path& video, const ScanOptions& options) {
       cv::Mat gray = decode_gray(f);
       timer.add("decode", ms_since(ts));
       const auto tp = Clock::now();
-      out.reads = read_frame(gray, settings, *decoder, options.rotate, options.decoder_only,
+      out.reads = read_frame(gray, settings, decoders, options.rotate, options.decoder_only, options.whole_frame,
                              options.max_symbols_per_frame, &out.regions);
       timer.add(options.decoder_only ? "decode_whole_frame" : "regions_decode", ms_since(tp));
       if (!out.reads.empty()) out.gray = gray;

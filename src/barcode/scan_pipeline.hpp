@@ -23,6 +23,9 @@ struct ScanOptions {
   std::string keyframes = "auto";  // "off", "auto" (k = 0.7, automatic shots) or a factor k
   std::string region = "auto";     // "off", "auto" (threshold from sample frames), "edges" or T in (0,1)
   bool rotate = true;
+  // Decode the whole key frame first and examine only the regions holding no symbol read there
+  // (the source let its decoder search whole frames too; zxing-cpp is fast enough to afford it).
+  bool whole_frame = true;
   DecoderKind decoder = DecoderKind::zxing;
   bool decoder_only = false;
   int threads = 2;
@@ -61,14 +64,23 @@ struct FrameRead {
   bool rotated = false;
 };
 
-// Reads one frame with the given settings (no key-frame logic). Thread-safe.
-std::vector<FrameRead> read_frame(const cv::Mat& frame, const StageSettings& settings, const Decoder& decoder,
-                                  bool rotate, bool decoder_only, int max_symbols, std::size_t* regions = nullptr);
+// The decoders of a scan: `whole` searches whole frames thoroughly, `crop` reads region crops.
+struct DecoderSet {
+  const Decoder& whole;
+  const Decoder& crop;
+};
+
+// Reads one frame (no key-frame logic): the decoder alone on the whole frame (decoder_only or
+// regions off); otherwise optionally the whole frame first, then every region holding no symbol
+// yet as is, then turned upright by the estimated direction when that fails. Thread-safe.
+std::vector<FrameRead> read_frame(const cv::Mat& frame, const StageSettings& settings, const DecoderSet& decoders,
+                                  bool rotate, bool decoder_only, bool whole_frame, int max_symbols,
+                                  std::size_t* regions = nullptr);
 
 // Picks the region threshold that reads the most distinct codes (then the most reads) on the
 // sample frames; ties go to the threshold nearest 0.45.
 double calibrate_region_threshold(const std::vector<cv::Mat>& samples, const RegionOptions& base,
-                                  const Decoder& decoder, bool rotate, int threads);
+                                  const DecoderSet& decoders, bool rotate, int threads);
 
 // Scans a video file or image folder. On an InputError while reading frames, the inventory
 // found so far is written (when options.out is set) before the error propagates.

@@ -47,12 +47,14 @@ TEST(Evaluation, TruthFileErrorsNameTheFile) {
 
 TEST(Evaluation, SweepHasTheSourcesColumns) {
   const auto cols = sweep_columns({});
-  ASSERT_EQ(cols.size(), 15u);
+  ASSERT_EQ(cols.size(), 16u);
   EXPECT_TRUE(cols[0].options.decoder_only);
   EXPECT_EQ(cols[1].options.region, "0.3");
   EXPECT_FALSE(cols[1].options.rotate);
   EXPECT_TRUE(cols[8].options.rotate);
-  EXPECT_EQ(cols[14].options.keyframes, "1.0");
+  EXPECT_FALSE(cols[8].options.whole_frame);
+  EXPECT_TRUE(cols[9].options.whole_frame);
+  EXPECT_EQ(cols[15].options.keyframes, "1.0");
 }
 
 }  // namespace

@@ -60,7 +60,7 @@ TEST_F(GeneratedScan, PipelineReadsLabelsWithoutFalseCodesAndAtLeastAsManyAsTheD
 
 TEST_F(GeneratedScan, OutputIsIdenticalForAnyThreadCount) {
   std::string first;
-  for (int threads : {1, 2, 3}) {
+  for (int threads : {1, 3}) {
     ScanOptions o;
     o.threads = threads;
     o.out = dir / ("threads" + std::to_string(threads));
