@@ -52,6 +52,14 @@ void sort_by_position(std::vector<DecodedSymbol>& symbols) {
   });
 }
 
+bool plausible(const DecodedSymbol& s) {
+  // Interleaved 2 of 5 has no start/stop characters worth the name: pieces of other symbols and
+  // of repetitive structures (rack uprights) decode as short ITF. Carton codes (ITF-14) and most
+  // ITF in use have 10 digits or more.
+  if (s.symbology == "ITF") return s.text.size() >= 10;
+  return !s.text.empty();
+}
+
 bool same_symbol(const DecodedSymbol& a, const DecodedSymbol& b) {
   return a.text == b.text && a.symbology == b.symbology;
 }
@@ -62,6 +70,7 @@ std::vector<DecodedSymbol> CombinedDecoder::decode(const cv::Mat& gray, int max_
   auto found = zxing_.decode(gray, max_symbols);
   if (static_cast<int>(found.size()) >= max_symbols) return found;
   for (auto& s : zbar_.decode(gray, max_symbols)) {
+    if (!detail::plausible(s)) continue;
     if (static_cast<int>(found.size()) >= max_symbols) break;
     if (std::none_of(found.begin(), found.end(), [&](const DecodedSymbol& f) { return detail::same_symbol(f, s); }))
       found.push_back(std::move(s));

@@ -23,7 +23,8 @@ enum class DecoderKind { zxing, zbar, both };
 DecoderKind parse_decoder_kind(const std::string& name);  // throws InputError on unknown names
 std::string to_string(DecoderKind kind);
 
-// Decodes 1D symbols from an 8-bit gray image. Implementations are stateless and may be called
+// Decodes 1D symbols from an 8-bit gray image. ITF with fewer than 10 digits is not reported
+// (short ITF is the usual false read: pieces of other symbols, repetitive structures). Implementations are stateless and may be called
 // from several threads at once.
 class Decoder {
  public:
@@ -76,6 +77,8 @@ namespace detail {
 cv::Mat as_gray_continuous(const cv::Mat& image);
 void sort_by_position(std::vector<DecodedSymbol>& symbols);
 bool same_symbol(const DecodedSymbol& a, const DecodedSymbol& b);
+// False-read guard shared by the decoders: ITF shorter than 10 digits is rejected.
+bool plausible(const DecodedSymbol& s);
 }  // namespace detail
 
 }  // namespace builtscene::barcode

@@ -63,7 +63,8 @@ std::vector<DecodedSymbol> ZBarDecoder::decode(const cv::Mat& image, int max_sym
         }
         s.corners = {cv::Point2f(x0, y0), cv::Point2f(x1, y0), cv::Point2f(x1, y1), cv::Point2f(x0, y1)};
       }
-      if (std::none_of(found.begin(), found.end(), [&](const DecodedSymbol& f) { return same_symbol(f, s); }))
+      if (detail::plausible(s) &&
+          std::none_of(found.begin(), found.end(), [&](const DecodedSymbol& f) { return same_symbol(f, s); }))
         found.push_back(std::move(s));
     }
   }

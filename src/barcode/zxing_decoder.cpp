@@ -71,7 +71,9 @@ std::vector<DecodedSymbol> ZXingDecoder::decode(const cv::Mat& image, int max_sy
     const ZXing::Result r = ZXing::ReadBarcode(view, hints);
     if (!r.isValid()) break;
     DecodedSymbol s = from_zxing(r);
-    const bool repeat = std::any_of(found.begin(), found.end(), [&](const DecodedSymbol& f) { return same_symbol(f, s); });
+    const bool rejected = !detail::plausible(s);
+    const bool repeat =
+        rejected || std::any_of(found.begin(), found.end(), [&](const DecodedSymbol& f) { return same_symbol(f, s); });
     if (max_symbols == 1 && !repeat) {
       found.push_back(std::move(s));
       break;
@@ -80,7 +82,9 @@ std::vector<DecodedSymbol> ZXingDecoder::decode(const cv::Mat& image, int max_sy
       gray = gray.clone();  // never write into the caller's image
       painted = true;
     }
-    if (repeat) {
+    if (rejected) {
+      grow = 1.0f;
+    } else if (repeat) {
       grow *= 1.8f;
     } else {
       grow = 1.0f;

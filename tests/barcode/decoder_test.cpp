@@ -91,3 +91,15 @@ TEST(Decoders, NothingInNoiseAndBadNames) {
 
 }  // namespace
 }  // namespace builtscene::barcode
+
+namespace builtscene::barcode {
+namespace {
+
+TEST(Decoders, ShortItfIsRejectedAsAFalseRead) {
+  EXPECT_FALSE(detail::plausible({"603726", "ITF", {}}));  // a piece of a Code 128 label, read as ITF
+  EXPECT_TRUE(detail::plausible({"10012345000017", "ITF", {}}));
+  EXPECT_TRUE(detail::plausible({"603726", "Code128", {}}));
+}
+
+}  // namespace
+}  // namespace builtscene::barcode
