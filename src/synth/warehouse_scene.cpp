@@ -176,7 +176,7 @@ void WarehouseScene::build_world(std::uint64_t seed) {
       for (int col = 0; col < 2; ++col) {
         WarehouseLabel label;
         label.kind = "location";
-        char text[16];
+        char text[48];
         std::snprintf(text, sizeof text, "RM%02d%02d%c", 14 + bay, col + 1, static_cast<char>('A' + level));
         label.text = text;
         label.symbology = "Code128";
