@@ -1,0 +1,63 @@
+#!/usr/bin/env bash
+# End-to-end barcode benchmark (issue 9 acceptance): a generated 2000-frame 1080p warehouse scan
+# with 18 location labels; the full pipeline (key frames auto, regions auto, rotation) against
+# the decoder alone on every whole frame, in the same run, RUNS times each, alternating.
+# Prints recognition rate, false codes and the median frames per second; writes
+# bench-out/barcodes_scan.json.
+#   bench/barcodes_scan.sh [WORKDIR] [RUNS]      (defaults: /tmp/builtscene-bench-barcodes, 3)
+# Environment: FRAMES (2000), SIZE (1920x1080), SEED (1), THREADS (2).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+BIN=${BIN:-build/release/apps/builtscene/builtscene}
+WORK=${1:-/tmp/builtscene-bench-barcodes}
+RUNS=${2:-3}
+FRAMES=${FRAMES:-2000}
+SIZE=${SIZE:-1920x1080}
+SEED=${SEED:-1}
+THREADS=${THREADS:-2}
+SCAN="$WORK/scan-$FRAMES-$SIZE-$SEED"
+mkdir -p bench-out "$WORK"
+if [ ! -f "$SCAN/truth.csv" ]; then
+  echo "generating $SCAN (takes a few minutes)" >&2
+  "$BIN" -q synth warehouse --out "$SCAN" --frames "$FRAMES" --size "$SIZE" --seed "$SEED" --json > "$WORK/synth.json"
+fi
+results=()
+for run in $(seq 1 "$RUNS"); do
+  for mode in decoder_only pipeline; do
+    args=()
+    [ "$mode" = decoder_only ] && args=(--decoder-only)
+    out="$WORK/out-$mode"
+    rm -rf "$out"
+    /usr/bin/time -f "%U %S" -o "$WORK/time.txt" \
+      "$BIN" -q barcodes scan --video "$SCAN/scan.avi" --out "$out" --threads "$THREADS" "${args[@]}" --json > "$WORK/scan.json"
+    "$BIN" -q barcodes eval --truth "$SCAN/truth.csv" --inventory "$out/inventory.csv" --json > "$WORK/eval.json"
+    cpu=$(awk '{print $1 + $2}' "$WORK/time.txt")
+    line=$(python3 - "$mode" "$run" "$cpu" "$WORK/scan.json" "$WORK/eval.json" <<'PY'
+import json, sys
+mode, run, cpu, s, e = sys.argv[1], int(sys.argv[2]), float(sys.argv[3]), json.load(open(sys.argv[4])), json.load(open(sys.argv[5]))
+print(json.dumps({"mode": mode, "run": run, "fps": s["fps"], "seconds": s["seconds"], "cpu_seconds": cpu,
+                  "frames": s["frames"], "keyframes": s["keyframes"], "reads": e["reads"],
+                  "recognition_rate": e["recognition_rate"], "location_recognized": e["location_recognized"],
+                  "location_labels": e["location_labels"], "recognized": e["recognized"],
+                  "legible_labels": e["legible_labels"], "false_codes": e["false_codes"]}))
+PY
+)
+    echo "$line" >&2
+    results+=("$line")
+  done
+done
+printf '%s\n' "${results[@]}" | python3 -c '
+import json, sys, statistics
+rows = [json.loads(l) for l in sys.stdin if l.strip()]
+out = {}
+for mode in ("decoder_only", "pipeline"):
+    r = [x for x in rows if x["mode"] == mode]
+    out[mode] = {k: r[-1][k] for k in ("frames", "keyframes", "reads", "recognition_rate", "recognized", "legible_labels",
+                                       "location_recognized", "location_labels", "false_codes")}
+    out[mode]["fps_median"] = statistics.median(x["fps"] for x in r)
+    out[mode]["fps_runs"] = [round(x["fps"], 1) for x in r]
+    out[mode]["cpu_seconds_median"] = statistics.median(x["cpu_seconds"] for x in r)
+out["speedup_wall"] = out["pipeline"]["fps_median"] / out["decoder_only"]["fps_median"]
+out["speedup_cpu"] = out["decoder_only"]["cpu_seconds_median"] / out["pipeline"]["cpu_seconds_median"]
+print(json.dumps(out, indent=2))
+' | tee bench-out/barcodes_scan.json

@@ -1,0 +1,84 @@
+#pragma once
+// Decoders for 1D symbols: zxing-cpp (default), ZBar, or both. A tiny interface over the two
+// libraries so the pipeline can decode a whole frame, a region crop or an uprighted crop alike.
+#include <array>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+namespace builtscene::barcode {
+
+// One decoded symbol. `symbology` uses zxing-cpp's names ("Code128", "EAN-13", "Code39", ...)
+// for both decoders so inventories from either compare equal.
+struct DecodedSymbol {
+  std::string text;
+  std::string symbology;
+  std::array<cv::Point2f, 4> corners{};  // in the pixel frame of the image given to decode()
+};
+
+enum class DecoderKind { zxing, zbar, both };
+
+DecoderKind parse_decoder_kind(const std::string& name);  // throws InputError on unknown names
+std::string to_string(DecoderKind kind);
+
+// Decodes 1D symbols from an 8-bit gray image. ITF with fewer than 10 digits is not reported
+// (short ITF is the usual false read: pieces of other symbols, repetitive structures). Implementations are stateless and may be called
+// from several threads at once.
+class Decoder {
+ public:
+  virtual ~Decoder() = default;
+  // At most `max_symbols` distinct symbols (>= 1), sorted by position (top-left first).
+  virtual std::vector<DecodedSymbol> decode(const cv::Mat& gray, int max_symbols) const = 0;
+  virtual std::string name() const = 0;
+};
+
+// zxing-cpp 1.4 aborts the process on an internal assertion (Result::operator==, lineCount() == 1)
+// when one ReadBarcodes call gathers several 1D symbols and then compares a symbol that already
+// has two scan lines. This decoder never asks zxing for more than one symbol per call: a search
+// for a single symbol stops as soon as its first symbol reaches two lines, before any such
+// comparison can happen. Several symbols are read by repeating the call with every symbol found
+// so far painted over.
+class ZXingDecoder final : public Decoder {
+ public:
+  // thorough = false: no 90-degree retry and no downscaled pyramid, for small crops that the
+  // pipeline has already cut out and turns upright itself.
+  explicit ZXingDecoder(bool thorough = true) : thorough_(thorough) {}
+  std::vector<DecodedSymbol> decode(const cv::Mat& gray, int max_symbols) const override;
+  std::string name() const override { return "zxing"; }
+
+ private:
+  bool thorough_;
+};
+
+class ZBarDecoder final : public Decoder {
+ public:
+  std::vector<DecodedSymbol> decode(const cv::Mat& gray, int max_symbols) const override;
+  std::string name() const override { return "zbar"; }
+};
+
+// zxing first; ZBar for whatever zxing did not read.
+class CombinedDecoder final : public Decoder {
+ public:
+  explicit CombinedDecoder(bool thorough = true) : zxing_(thorough) {}
+  std::vector<DecodedSymbol> decode(const cv::Mat& gray, int max_symbols) const override;
+  std::string name() const override { return "both"; }
+
+ private:
+  ZXingDecoder zxing_;
+  ZBarDecoder zbar_;
+};
+
+// thorough: see ZXingDecoder (ZBar has no such setting).
+std::unique_ptr<Decoder> make_decoder(DecoderKind kind, bool thorough = true);
+
+namespace detail {
+cv::Mat as_gray_continuous(const cv::Mat& image);
+void sort_by_position(std::vector<DecodedSymbol>& symbols);
+bool same_symbol(const DecodedSymbol& a, const DecodedSymbol& b);
+// False-read guard shared by the decoders: ITF shorter than 10 digits is rejected.
+bool plausible(const DecodedSymbol& s);
+}  // namespace detail
+
+}  // namespace builtscene::barcode
