@@ -37,7 +37,7 @@ class MapPoint : public std::enable_shared_from_this<MapPoint> {
   bool bad = false;
   std::shared_ptr<MapPoint> replaced_by;  // set when fused into another point
   // Marks (frame or keyframe ids) so a pass visits each point once.
-  long local_map_mark = -1, fuse_mark = -1, ba_mark = -1;
+  long local_map_mark = -1, track_mark = -1, fuse_mark = -1, ba_mark = -1;
 
   float found_ratio() const { return static_cast<float>(found) / static_cast<float>(std::max(visible, 1)); }
   int observation_count() const { return static_cast<int>(observations.size()); }
