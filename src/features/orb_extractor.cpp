@@ -101,37 +101,54 @@ void OrbExtractor::build_pyramid(const cv::Mat& gray) {
 std::vector<cv::KeyPoint> OrbExtractor::detect_level(int level) const {
   const cv::Mat& img = levels_[static_cast<std::size_t>(level)];
   if (img.empty() || img.cols <= 2 * kBorder || img.rows <= 2 * kBorder) return {};
-  // FAST once at the low threshold over the inner region; the score of a FAST corner is the
-  // largest threshold at which it is still a corner, so "passes at ini_th_fast" is
-  // response >= ini_th_fast. That gives the per-cell fallback of two FAST passes at the cost
-  // of one.
-  const cv::Rect inner(kBorder - 3, kBorder - 3, img.cols - 2 * (kBorder - 3), img.rows - 2 * (kBorder - 3));
-  std::vector<cv::KeyPoint> all;
-  cv::FAST(img(inner), all, options_.min_th_fast, true, cv::FastFeatureDetector::TYPE_9_16);
+  // FAST at ini_th_fast over the inner region; then, only in cells where nothing passed,
+  // FAST again at min_th_fast on that cell (plus the 3-pixel ring FAST needs). The second
+  // pass touches only low-contrast cells, which keeps the cost near one FAST pass.
+  const int x0 = kBorder - 3, y0 = kBorder - 3;
+  const cv::Rect inner(x0, y0, img.cols - 2 * x0, img.rows - 2 * y0);
+  std::vector<cv::KeyPoint> strong_kps;
+  cv::FAST(img(inner), strong_kps, options_.ini_th_fast, true, cv::FastFeatureDetector::TYPE_9_16);
   const int cells_x = std::max(1, (img.cols - 2 * kBorder) / kThresholdCell);
   const int cells_y = std::max(1, (img.rows - 2 * kBorder) / kThresholdCell);
   const float cw = static_cast<float>(img.cols - 2 * kBorder) / static_cast<float>(cells_x);
   const float ch = static_cast<float>(img.rows - 2 * kBorder) / static_cast<float>(cells_y);
-  std::vector<char> strong(static_cast<std::size_t>(cells_x * cells_y), 0);
-  std::vector<int> cell_of(all.size(), -1);
-  for (std::size_t i = 0; i < all.size(); ++i) {
-    auto& k = all[i];
-    k.pt.x += static_cast<float>(kBorder - 3);
-    k.pt.y += static_cast<float>(kBorder - 3);
-    if (k.pt.x < kBorder || k.pt.y < kBorder || k.pt.x >= static_cast<float>(img.cols - kBorder) ||
-        k.pt.y >= static_cast<float>(img.rows - kBorder))
-      continue;
+  auto inside = [&](const cv::KeyPoint& k) {
+    return k.pt.x >= kBorder && k.pt.y >= kBorder && k.pt.x < static_cast<float>(img.cols - kBorder) &&
+           k.pt.y < static_cast<float>(img.rows - kBorder);
+  };
+  std::vector<char> has_strong(static_cast<std::size_t>(cells_x * cells_y), 0);
+  std::vector<cv::KeyPoint> kept;
+  kept.reserve(strong_kps.size() + 256);
+  for (auto& k : strong_kps) {
+    k.pt.x += static_cast<float>(x0);
+    k.pt.y += static_cast<float>(y0);
+    if (!inside(k)) continue;
     const int cx = std::min(cells_x - 1, static_cast<int>((k.pt.x - kBorder) / cw));
     const int cy = std::min(cells_y - 1, static_cast<int>((k.pt.y - kBorder) / ch));
-    cell_of[i] = cy * cells_x + cx;
-    if (k.response >= static_cast<float>(options_.ini_th_fast)) strong[static_cast<std::size_t>(cell_of[i])] = 1;
+    has_strong[static_cast<std::size_t>(cy * cells_x + cx)] = 1;
+    kept.push_back(k);
   }
-  std::vector<cv::KeyPoint> kept;
-  kept.reserve(all.size());
-  for (std::size_t i = 0; i < all.size(); ++i) {
-    if (cell_of[i] < 0) continue;
-    if (strong[static_cast<std::size_t>(cell_of[i])] && all[i].response < static_cast<float>(options_.ini_th_fast)) continue;
-    kept.push_back(all[i]);
+  if (options_.min_th_fast < options_.ini_th_fast) {
+    std::vector<cv::KeyPoint> weak;
+    for (int cy = 0; cy < cells_y; ++cy) {
+      for (int cx = 0; cx < cells_x; ++cx) {
+        if (has_strong[static_cast<std::size_t>(cy * cells_x + cx)]) continue;
+        const int cell_x0 = kBorder + static_cast<int>(std::floor(static_cast<float>(cx) * cw));
+        const int cell_y0 = kBorder + static_cast<int>(std::floor(static_cast<float>(cy) * ch));
+        const int cell_x1 = cx == cells_x - 1 ? img.cols - kBorder : kBorder + static_cast<int>(std::floor(static_cast<float>(cx + 1) * cw));
+        const int cell_y1 = cy == cells_y - 1 ? img.rows - kBorder : kBorder + static_cast<int>(std::floor(static_cast<float>(cy + 1) * ch));
+        const cv::Rect roi(cell_x0 - 3, cell_y0 - 3, cell_x1 - cell_x0 + 6, cell_y1 - cell_y0 + 6);
+        weak.clear();
+        cv::FAST(img(roi), weak, options_.min_th_fast, true, cv::FastFeatureDetector::TYPE_9_16);
+        for (auto& k : weak) {
+          k.pt.x += static_cast<float>(roi.x);
+          k.pt.y += static_cast<float>(roi.y);
+          // Only the cell itself: the ring belongs to the neighbours.
+          if (k.pt.x < cell_x0 || k.pt.y < cell_y0 || k.pt.x >= cell_x1 || k.pt.y >= cell_y1) continue;
+          kept.push_back(k);
+        }
+      }
+    }
   }
   const cv::Rect2f bounds(static_cast<float>(kBorder), static_cast<float>(kBorder),
                           static_cast<float>(img.cols - 2 * kBorder), static_cast<float>(img.rows - 2 * kBorder));
