@@ -120,6 +120,7 @@ nlohmann::json run_slam(const SlamOptions& opt) {
         {"keyframes_culled", stats.keyframes_culled},
         {"points_culled", stats.points_culled},
         {"points_fused", stats.points_fused},
+        {"points_triangulated", stats.points_triangulated},
         {"bundle_adjustments", stats.bundle_adjustments},
         {"bundle_adjustments_aborted", stats.bundle_adjustments_aborted},
         {"max_queue", stats.max_queue}}},

@@ -1,6 +1,7 @@
 #include "slam/local_mapping.hpp"
 
 #include <chrono>
+#include <cmath>
 
 #include "slam/key_frame.hpp"
 #include "slam/local_bundle_adjuster.hpp"
@@ -104,6 +105,7 @@ void LocalMapping::process(const std::shared_ptr<KeyFrame>& kf) {
     if (kf->bad) return;
     insert_into_map(*kf);
     cull_recent_points(*kf);
+    if (opt_.triangulation) triangulate_with_neighbours(*kf);
   }
   if (queue_empty()) {
     std::lock_guard lock(map_.mutex());
@@ -165,6 +167,127 @@ void LocalMapping::cull_recent_points(const KeyFrame& kf) {
   stats_.points_culled += culled;
 }
 
+namespace {
+
+// Linear (DLT) triangulation of normalized image rays x1, x2 seen from T1, T2 (world -> camera).
+bool triangulate(const Eigen::Vector2d& x1, const Eigen::Vector2d& x2, const SE3& T1, const SE3& T2,
+                 Eigen::Vector3d& out) {
+  const Eigen::Matrix<double, 3, 4> P1 = T1.matrix().topRows<3>(), P2 = T2.matrix().topRows<3>();
+  Eigen::Matrix4d A;
+  A.row(0) = x1.x() * P1.row(2) - P1.row(0);
+  A.row(1) = x1.y() * P1.row(2) - P1.row(1);
+  A.row(2) = x2.x() * P2.row(2) - P2.row(0);
+  A.row(3) = x2.y() * P2.row(2) - P2.row(1);
+  Eigen::JacobiSVD<Eigen::Matrix4d> svd(A, Eigen::ComputeFullV);
+  const Eigen::Vector4d h = svd.matrixV().col(3);
+  if (std::abs(h[3]) < 1e-12) return false;
+  out = h.head<3>() / h[3];
+  return out.allFinite();
+}
+
+}  // namespace
+
+void LocalMapping::triangulate_with_neighbours(KeyFrame& kf) {
+  const auto& f1 = *kf.f;
+  const auto& ctx = *f1.ctx;
+  const auto& metric = ctx.metric;
+  const auto& pyr = ctx.pyramid;
+  const Intrinsics K = intrinsics_of(ctx);
+  const double baseline = K.bf / K.fx;
+  const Eigen::Vector3d O1 = kf.camera_center();
+  const SE3 T1 = kf.pose();
+  const Eigen::Matrix3d Kinv = (Eigen::Matrix3d() << 1 / K.fx, 0, -K.cx / K.fx, 0, 1 / K.fy, -K.cy / K.fy, 0, 0, 1).finished();
+  long created = 0;
+  for (KeyFrame* n : kf.best_covisibles(static_cast<std::size_t>(opt_.covisible_for_triangulation))) {
+    if (n->bad) continue;
+    const Eigen::Vector3d O2 = n->camera_center();
+    if ((O2 - O1).norm() < baseline) continue;  // too short a baseline to beat the depth sensor
+    const auto& f2 = *n->f;
+    const SE3 T2 = n->pose();
+    // Fundamental matrix 1 -> 2: F = K^-T [t21]x R21 K^-1.
+    const SE3 T21 = T2 * T1.inverse();
+    const Eigen::Vector3d t = T21.translation();
+    Eigen::Matrix3d tx;
+    tx << 0, -t.z(), t.y(), t.z(), 0, -t.x(), -t.y(), t.x(), 0;
+    const Eigen::Matrix3d F = Kinv.transpose() * tx * T21.rotation_matrix() * Kinv;
+    std::vector<int> free2;
+    for (std::size_t j = 0; j < f2.size(); ++j)
+      if (!n->points[j]) free2.push_back(static_cast<int>(j));
+    std::vector<float> best_for_j(f2.size(), metric.infinity());
+    std::vector<int> match_of_j(f2.size(), -1);
+    for (std::size_t i = 0; i < f1.size(); ++i) {
+      if (kf.points[i]) continue;
+      const auto& k1 = f1.keys_un[i];
+      const Eigen::Vector3d l = F * Eigen::Vector3d(k1.pt.x, k1.pt.y, 1.0);  // epipolar line in image 2
+      const double ln = l.head<2>().squaredNorm();
+      if (ln < 1e-12) continue;
+      float best = metric.strict + 1;
+      int best_j = -1;
+      for (int j : free2) {
+        const auto& k2 = f2.keys_un[static_cast<std::size_t>(j)];
+        const double d = l.dot(Eigen::Vector3d(k2.pt.x, k2.pt.y, 1.0));
+        if (d * d / ln > 3.84 * pyr.sigma2[static_cast<std::size_t>(k2.octave)]) continue;
+        const float dist = metric.distance(f1.descriptors, static_cast<int>(i), f2.descriptors, j);
+        if (dist < best) {
+          best = dist;
+          best_j = j;
+        }
+      }
+      if (best_j < 0 || best > metric.strict) continue;
+      if (best < best_for_j[static_cast<std::size_t>(best_j)]) {
+        best_for_j[static_cast<std::size_t>(best_j)] = best;
+        match_of_j[static_cast<std::size_t>(best_j)] = static_cast<int>(i);
+      }
+    }
+    for (std::size_t j = 0; j < f2.size(); ++j) {
+      const int i = match_of_j[j];
+      if (i < 0 || kf.points[static_cast<std::size_t>(i)] || n->points[j]) continue;
+      const auto is = static_cast<std::size_t>(i);
+      const auto& k1 = f1.keys_un[is];
+      const auto& k2 = f2.keys_un[j];
+      const Eigen::Vector2d x1((k1.pt.x - K.cx) / K.fx, (k1.pt.y - K.cy) / K.fy);
+      const Eigen::Vector2d x2((k2.pt.x - K.cx) / K.fx, (k2.pt.y - K.cy) / K.fy);
+      const Eigen::Vector3d r1 = T1.rotation().inverse() * Eigen::Vector3d(x1.x(), x1.y(), 1.0);
+      const Eigen::Vector3d r2 = T2.rotation().inverse() * Eigen::Vector3d(x2.x(), x2.y(), 1.0);
+      const double cos_parallax = r1.dot(r2) / (r1.norm() * r2.norm());
+      Eigen::Vector3d pw;
+      if (cos_parallax < 0.9998 && cos_parallax > 0) {
+        if (!triangulate(x1, x2, T1, T2, pw)) continue;
+      } else if (f1.has_depth(is)) {
+        pw = T1.inverse() * f1.unproject(is);
+      } else if (f2.has_depth(j)) {
+        pw = T2.inverse() * f2.unproject(j);
+      } else {
+        continue;
+      }
+      // In front of both cameras, reprojecting within the chi-square bound in both.
+      Observation o1{Eigen::Vector2d(k1.pt.x, k1.pt.y), f1.u_right[is], pyr.inv_sigma2[static_cast<std::size_t>(k1.octave)]};
+      Observation o2{Eigen::Vector2d(k2.pt.x, k2.pt.y), f2.u_right[j], pyr.inv_sigma2[static_cast<std::size_t>(k2.octave)]};
+      if (reprojection_chi2(K, o1, T1 * pw) > (o1.stereo() ? kChi2Stereo : kChi2Mono)) continue;
+      if (reprojection_chi2(K, o2, T2 * pw) > (o2.stereo() ? kChi2Stereo : kChi2Mono)) continue;
+      // Scale consistency: the distance ratio must agree with the pyramid levels.
+      const double d1 = (pw - O1).norm(), d2 = (pw - O2).norm();
+      if (d1 <= 0 || d2 <= 0) continue;
+      const double ratio_dist = d2 / d1;
+      const double ratio_octave = pyr.scale[static_cast<std::size_t>(k1.octave)] / pyr.scale[static_cast<std::size_t>(k2.octave)];
+      const double factor = 1.5 * pyr.scale_factor;
+      if (ratio_dist * factor < ratio_octave || ratio_dist > ratio_octave * factor) continue;
+      auto p = std::make_shared<MapPoint>(map_.next_point_id(), pw, &kf, kf.id);
+      p->add_observation(&kf, i);
+      p->add_observation(n, static_cast<int>(j));
+      kf.add_point(i, p);
+      n->add_point(static_cast<int>(j), p);
+      p->update_descriptor();
+      p->update_normal_and_depth();
+      map_.add_point(p);
+      recent_points_.push_back(p);
+      ++created;
+    }
+  }
+  std::lock_guard s(stats_mutex_);
+  stats_.points_triangulated += created;
+}
+
 void LocalMapping::fuse_with_neighbours(KeyFrame& kf) {
   // Neighbours and their neighbours (ORB-SLAM's SearchInNeighbors).
   std::vector<KeyFrame*> targets;
@@ -224,7 +347,7 @@ void LocalMapping::local_bundle_adjustment(KeyFrame& kf) {
     };
     add_cam(&kf, false);
     kf.ba_local_mark = kf.id;
-    for (KeyFrame* n : kf.ordered_connections) {
+    for (KeyFrame* n : kf.best_covisibles(static_cast<std::size_t>(opt_.ba_window))) {
       if (n->bad) continue;
       n->ba_local_mark = kf.id;
       add_cam(n, false);

@@ -8,9 +8,8 @@
 // list of recently created points; map data is touched only under the map lock. Bundle
 // adjustment is solved outside the lock on a copy (see local_bundle_adjuster.hpp) and can be
 // interrupted by tracking when a new keyframe arrives.
-//
-// Not yet here (issue 4 follow-up): new points by triangulation between neighbouring
-// keyframes (RGB-D tracking already creates points from depth for every keyframe).
+// New points come from depth (created by tracking with each keyframe) and from triangulating
+// keypoints still unmatched against the neighbouring keyframes (epipolar-guided matching).
 #include <atomic>
 #include <condition_variable>
 #include <deque>
@@ -34,7 +33,12 @@ struct LocalMappingOptions {
   float redundant_ratio = 0.9f;    // keyframe culling
   int redundant_min_observers = 3;
   int covisible_for_fusion = 10;   // ORB-SLAM: 10 for RGB-D/stereo
+  int covisible_for_triangulation = 10;
+  bool triangulation = true;
   bool bundle_adjustment = true;
+  // Local BA window: the new keyframe and its most covisible neighbours (ORB-SLAM takes all
+  // covisible keyframes; with Ceres on two cores that makes BA seconds long on dense maps).
+  int ba_window = 10;
 };
 
 // ORB-SLAM's keyframe culling rule: a keyframe is redundant when at least `ratio` of its map
@@ -64,6 +68,7 @@ class LocalMapping : public KeyFrameSink {
     long keyframes_culled = 0;
     long points_culled = 0;
     long points_fused = 0;
+    long points_triangulated = 0;
     long bundle_adjustments = 0;
     long bundle_adjustments_aborted = 0;
     std::size_t max_queue = 0;
@@ -92,6 +97,7 @@ class LocalMapping : public KeyFrameSink {
   void insert_into_map(KeyFrame& kf);
   void cull_recent_points(const KeyFrame& kf);
   void fuse_with_neighbours(KeyFrame& kf);
+  void triangulate_with_neighbours(KeyFrame& kf);
   void local_bundle_adjustment(KeyFrame& kf);
   void cull_keyframes(KeyFrame& kf);
   bool queue_empty() const;
