@@ -53,11 +53,22 @@ void LocalMapping::finish() {
   if (thread_.joinable()) thread_.join();
 }
 
-void LocalMapping::insert_keyframe(std::shared_ptr<KeyFrame> kf) {
-  if (!thread_.joinable()) {
+void LocalMapping::run_pending() {
+  if (thread_.joinable()) return;
+  for (;;) {
+    std::shared_ptr<KeyFrame> kf;
+    {
+      std::lock_guard lock(queue_mutex_);
+      if (queue_.empty()) break;
+      kf = queue_.front();
+      queue_.pop_front();
+    }
     process(kf);
-    return;
   }
+  idle_ = true;
+}
+
+void LocalMapping::insert_keyframe(std::shared_ptr<KeyFrame> kf) {
   {
     std::lock_guard lock(queue_mutex_);
     queue_.push_back(std::move(kf));

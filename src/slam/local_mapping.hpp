@@ -52,9 +52,11 @@ class LocalMapping : public KeyFrameSink {
   LocalMapping(Map& map, LocalMappingOptions options, StageTimer* timer = nullptr);
   ~LocalMapping() override;
 
-  // Starts the thread. Without start(), insert_keyframe processes synchronously (tests,
-  // deterministic runs).
+  // Starts the thread. Without start(), keyframes wait in the queue until the owner calls
+  // run_pending() (tests, deterministic runs); tracking inserts while holding the map lock,
+  // so processing cannot happen inside insert_keyframe.
   void start();
+  void run_pending();
   // Processes what is queued, then stops and joins the thread.
   void finish();
 

@@ -37,6 +37,7 @@ TrackingOutcome System::track_rgbd(const cv::Mat& image, const cv::Mat& depth_m,
   Frame frame(next_frame_id_++, timestamp, std::move(features));
   TrackingOutcome out = tracker_->track(std::move(frame));
   out.keypoints = keypoints;
+  if (!options_.mapping_thread) mapping_->run_pending();
   timer_.add("tracking", ms_since(t0));
   timer_.add("frame", ms_since(start));
   return out;
@@ -45,6 +46,7 @@ TrackingOutcome System::track_rgbd(const cv::Mat& image, const cv::Mat& depth_m,
 void System::shutdown() {
   if (shut_down_) return;
   shut_down_ = true;
+  mapping_->run_pending();
   mapping_->finish();
 }
 

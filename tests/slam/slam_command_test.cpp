@@ -119,6 +119,20 @@ TEST_F(SlamCommand, BadInputIsCountedNotFatal) {
   EXPECT_EQ(lines_of(dir / "traj.txt").size(), j["tracked_frames"].get<std::size_t>());
 }
 
+TEST_F(SlamCommand, SynchronousMappingTracksAndMaps) {
+  if (!fs::exists(kKitchen / "rgb.txt")) GTEST_SKIP() << "7scenes-kitchen not found at " << kKitchen;
+  copy_kitchen(20);
+  const auto r = run("slam --dataset " + dir.string() + " --trajectory " + (dir / "traj.txt").string() +
+                     " --keyframes " + (dir / "kf.txt").string() + " --sync-mapping --max-frames 15 --json");
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["frames"], 15);
+  EXPECT_EQ(j["tracked_frames"], 15);
+  EXPECT_GE(j["keyframes"].get<int>(), 1);
+  EXPECT_GE(j["local_mapping"]["keyframes_processed"].get<int>(), 1);
+  EXPECT_EQ(lines_of(dir / "kf.txt").size(), j["keyframes"].get<std::size_t>());
+}
+
 TEST_F(SlamCommand, MissingDatasetIsUsageError) {
   const auto r = run("slam --dataset " + (dir / "nope").string() + " --trajectory " + (dir / "t.txt").string());
   EXPECT_EQ(r.exit_code, 2);
