@@ -46,9 +46,10 @@ std::vector<cv::KeyPoint> distribute_quadtree(const std::vector<cv::KeyPoint>& k
   while (live < wanted && !heap.empty()) {
     const int idx = heap.top();
     heap.pop();
-    const Cell parent = cells[static_cast<std::size_t>(idx)];
-    const float hw = parent.box.width * 0.5f, hh = parent.box.height * 0.5f;
+    const float hw = cells[static_cast<std::size_t>(idx)].box.width * 0.5f;
+    const float hh = cells[static_cast<std::size_t>(idx)].box.height * 0.5f;
     if (hw < 1.0f || hh < 1.0f) continue;  // too small to split: keep as a leaf
+    const Cell parent = std::move(cells[static_cast<std::size_t>(idx)]);  // its slot is retired below
     Cell child[4];
     for (int q = 0; q < 4; ++q)
       child[q].box = cv::Rect2f(parent.box.x + (q % 2) * hw, parent.box.y + static_cast<float>(q / 2) * hh, hw, hh);
