@@ -174,6 +174,38 @@ float OrbExtractor::orientation(const cv::Mat& image, cv::Point2f pt) const {
   return cv::fastAtan2(static_cast<float>(m01), static_cast<float>(m10));
 }
 
+void OrbExtractor::describe_level(int l, std::vector<cv::KeyPoint>& kps, cv::Mat& desc) const {
+  desc.create(static_cast<int>(kps.size()), 32, CV_8UC1);
+  if (kps.empty()) return;
+  const cv::Mat& img = levels_[static_cast<std::size_t>(l)];
+  cv::Mat blurred;
+  cv::GaussianBlur(img, blurred, cv::Size(7, 7), 2, 2, cv::BORDER_REFLECT_101);
+  const auto& pattern = orb_brief_pattern();
+  const float scale = pyramid_.scale[static_cast<std::size_t>(l)];
+  const int step = static_cast<int>(blurred.step1());
+  int row = 0;
+  for (auto& k : kps) {
+    k.angle = orientation(img, k.pt);
+    const float a = k.angle * static_cast<float>(CV_PI / 180.0);
+    const float c = std::cos(a), s = std::sin(a);
+    const std::uint8_t* center = blurred.ptr<std::uint8_t>(cvRound(k.pt.y)) + cvRound(k.pt.x);
+    std::uint8_t* d = desc.ptr<std::uint8_t>(row++);
+    for (int b = 0; b < 32; ++b) {
+      std::uint8_t byte = 0;
+      for (int bit = 0; bit < 8; ++bit) {
+        const BriefPair& p = pattern[static_cast<std::size_t>(b * 8 + bit)];
+        const int u1 = cvRound(p.x1 * c - p.y1 * s), v1 = cvRound(p.x1 * s + p.y1 * c);
+        const int u2 = cvRound(p.x2 * c - p.y2 * s), v2 = cvRound(p.x2 * s + p.y2 * c);
+        byte |= static_cast<std::uint8_t>((center[v1 * step + u1] < center[v2 * step + u2]) << bit);
+      }
+      d[b] = byte;
+    }
+    k.octave = l;
+    k.size = 2.0f * kOrbPatchRadius * scale;
+    k.pt *= scale;
+  }
+}
+
 void OrbExtractor::extract(const cv::Mat& gray_in, std::vector<cv::KeyPoint>& keypoints, cv::Mat& descriptors) {
   keypoints.clear();
   descriptors.release();
@@ -181,46 +213,30 @@ void OrbExtractor::extract(const cv::Mat& gray_in, std::vector<cv::KeyPoint>& ke
   CV_Assert(gray_in.type() == CV_8UC1);
   build_pyramid(gray_in);
 
-  std::vector<std::vector<cv::KeyPoint>> per_level(static_cast<std::size_t>(options_.n_levels));
+  // Levels are independent once the pyramid exists: detection, orientation and description
+  // run per level, in parallel when allowed; the result does not depend on the thread count.
+  const auto L = static_cast<std::size_t>(options_.n_levels);
+  std::vector<std::vector<cv::KeyPoint>> per_level(L);
+  std::vector<cv::Mat> per_level_desc(L);
+  auto work = [&](const cv::Range& r) {
+    for (int l = r.start; l < r.end; ++l) {
+      per_level[static_cast<std::size_t>(l)] = detect_level(l);
+      describe_level(l, per_level[static_cast<std::size_t>(l)], per_level_desc[static_cast<std::size_t>(l)]);
+    }
+  };
+  if (options_.parallel_levels) cv::parallel_for_(cv::Range(0, options_.n_levels), work);
+  else work(cv::Range(0, options_.n_levels));
+
   std::size_t total = 0;
-  for (int l = 0; l < options_.n_levels; ++l) {
-    per_level[static_cast<std::size_t>(l)] = detect_level(l);
-    total += per_level[static_cast<std::size_t>(l)].size();
-  }
+  for (const auto& v : per_level) total += v.size();
   keypoints.reserve(total);
   descriptors.create(static_cast<int>(total), 32, CV_8UC1);
-  const auto& pattern = orb_brief_pattern();
   int row = 0;
-  cv::Mat blurred;
-  for (int l = 0; l < options_.n_levels; ++l) {
-    auto& kps = per_level[static_cast<std::size_t>(l)];
-    if (kps.empty()) continue;
-    const cv::Mat& img = levels_[static_cast<std::size_t>(l)];
-    cv::GaussianBlur(img, blurred, cv::Size(7, 7), 2, 2, cv::BORDER_REFLECT_101);
-    const float scale = pyramid_.scale[static_cast<std::size_t>(l)];
-    const int step = static_cast<int>(blurred.step1());
-    for (auto& k : kps) {
-      k.angle = orientation(img, k.pt);
-      const float a = k.angle * static_cast<float>(CV_PI / 180.0);
-      const float c = std::cos(a), s = std::sin(a);
-      const std::uint8_t* center = blurred.ptr<std::uint8_t>(cvRound(k.pt.y)) + cvRound(k.pt.x);
-      std::uint8_t* desc = descriptors.ptr<std::uint8_t>(row);
-      for (int b = 0; b < 32; ++b) {
-        std::uint8_t byte = 0;
-        for (int bit = 0; bit < 8; ++bit) {
-          const BriefPair& p = pattern[static_cast<std::size_t>(b * 8 + bit)];
-          const int u1 = cvRound(p.x1 * c - p.y1 * s), v1 = cvRound(p.x1 * s + p.y1 * c);
-          const int u2 = cvRound(p.x2 * c - p.y2 * s), v2 = cvRound(p.x2 * s + p.y2 * c);
-          byte |= static_cast<std::uint8_t>((center[v1 * step + u1] < center[v2 * step + u2]) << bit);
-        }
-        desc[b] = byte;
-      }
-      k.octave = l;
-      k.size = 2.0f * kOrbPatchRadius * scale;
-      k.pt *= scale;
-      keypoints.push_back(k);
-      ++row;
-    }
+  for (std::size_t l = 0; l < L; ++l) {
+    if (per_level[l].empty()) continue;
+    per_level_desc[l].copyTo(descriptors.rowRange(row, row + per_level_desc[l].rows));
+    row += per_level_desc[l].rows;
+    keypoints.insert(keypoints.end(), per_level[l].begin(), per_level[l].end());
   }
 }
 

@@ -17,6 +17,10 @@ struct OrbExtractorOptions {
   int n_levels = 8;
   int ini_th_fast = 20;
   int min_th_fast = 7;
+  // Process pyramid levels on OpenCV's thread pool (same output either way). Off by default:
+  // on the shared 2-core machine it did not lower the median time (load 10, not conclusive),
+  // and the local-mapping thread needs the second core.
+  bool parallel_levels = false;
 
   // ORBextractor.nFeatures, .scaleFactor, .nLevels, .iniThFAST, .minThFAST when present;
   // InputError naming the key for values out of range.
@@ -58,6 +62,7 @@ class OrbExtractor {
 
   void build_pyramid(const cv::Mat& gray);
   std::vector<cv::KeyPoint> detect_level(int level) const;
+  void describe_level(int level, std::vector<cv::KeyPoint>& keypoints, cv::Mat& descriptors) const;
   float orientation(const cv::Mat& image, cv::Point2f pt) const;
 };
 

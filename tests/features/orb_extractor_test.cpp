@@ -109,6 +109,26 @@ TEST(OrbExtractor, RespectsBudgetAndLevels) {
   EXPECT_EQ(max_octave, 7);
 }
 
+TEST(OrbExtractor, ParallelLevelsGiveIdenticalOutput) {
+  const cv::Mat img = test::textured_image(640, 480, 9);
+  OrbExtractorOptions serial;
+  serial.parallel_levels = false;
+  OrbExtractorOptions parallel;
+  parallel.parallel_levels = true;
+  OrbExtractor a(serial), b(parallel);
+  std::vector<cv::KeyPoint> ka, kb;
+  cv::Mat da, db;
+  a.extract(img, ka, da);
+  b.extract(img, kb, db);
+  ASSERT_EQ(ka.size(), kb.size());
+  for (std::size_t i = 0; i < ka.size(); ++i) {
+    EXPECT_EQ(ka[i].pt, kb[i].pt);
+    EXPECT_EQ(ka[i].angle, kb[i].angle);
+    EXPECT_EQ(ka[i].octave, kb[i].octave);
+  }
+  EXPECT_EQ(cv::norm(da, db, cv::NORM_HAMMING), 0.0);
+}
+
 TEST(OrbExtractor, BlankAndTinyImagesGiveNothing) {
   OrbExtractor orb;
   std::vector<cv::KeyPoint> k;
