@@ -1,0 +1,153 @@
+// `builtscene slam`: RGB-D SLAM over a TUM-layout sequence; writes the trajectory of every
+// tracked frame and the keyframe trajectory (TUM format).
+#include <chrono>
+#include <fstream>
+#include <limits>
+#include <memory>
+
+#include "command_registry.hpp"
+#include "core/errors.hpp"
+#include "core/logging.hpp"
+#include "core/progress.hpp"
+#include "core/settings_file.hpp"
+#include "io/trajectory.hpp"
+#include "io/tum_dataset.hpp"
+#include "slam/system.hpp"
+
+namespace builtscene::app {
+namespace {
+
+struct SlamOptions {
+  std::filesystem::path dataset;
+  std::filesystem::path camera;
+  std::filesystem::path trajectory;
+  std::filesystem::path keyframes;
+  long max_frames = 0;
+  bool sync_mapping = false;
+};
+
+nlohmann::json run_slam(const SlamOptions& opt) {
+  const TumDataset data = TumDataset::open(opt.dataset, opt.camera);
+  const auto camera_file = opt.camera.empty() ? opt.dataset / "camera.yaml" : opt.camera;
+  slam::SystemOptions so;
+  so.orb = OrbExtractorOptions::from_settings(SettingsFile::load(camera_file));
+  so.mapping_thread = !opt.sync_mapping;
+  // Fail on an unwritable output before spending minutes on the sequence.
+  for (const auto& out : {opt.trajectory, opt.keyframes}) {
+    if (out.empty()) continue;
+    std::ofstream probe(out, std::ios::app);
+    if (!probe) throw InputError(located(out, 0, "cannot write output file"));
+  }
+
+  slam::System system(data.settings(), so);
+  const std::size_t n = opt.max_frames > 0 ? std::min<std::size_t>(data.size(), static_cast<std::size_t>(opt.max_frames))
+                                           : data.size();
+  long tracked = 0, lost = 0, lost_events = 0, not_initialized = 0;
+  long unreadable_rgb = 0, bad_depth = 0, out_of_order = 0, no_features = 0;
+  double last_timestamp = -std::numeric_limits<double>::infinity();
+  bool was_ok = false;
+  Progress progress("slam", n);
+  const auto start = std::chrono::steady_clock::now();
+  for (std::size_t i = 0; i < n; ++i) {
+    progress.update(i);
+    const auto& e = data.entry(i);
+    if (!(e.timestamp > last_timestamp)) {
+      ++out_of_order;
+      spdlog::warn("frame {}: timestamp {:.6f} not after {:.6f}; skipped", i, e.timestamp, last_timestamp);
+      continue;
+    }
+    cv::Mat rgb, depth;
+    try {
+      rgb = data.load_rgb(i);
+    } catch (const InputError& err) {
+      ++unreadable_rgb;
+      spdlog::warn("frame {}: {}; skipped", i, err.what());
+      continue;
+    }
+    try {
+      depth = data.load_depth(i);
+    } catch (const InputError& err) {
+      ++bad_depth;
+      spdlog::warn("frame {}: {}; tracked without depth", i, err.what());
+    }
+    last_timestamp = e.timestamp;
+    const auto out = system.track_rgbd(rgb, depth, e.timestamp);
+    if (out.keypoints < 20) ++no_features;
+    if (out.state == slam::TrackingState::kOk) {
+      ++tracked;
+      was_ok = true;
+    } else if (out.state == slam::TrackingState::kLost) {
+      ++lost;
+      if (was_ok) {
+        ++lost_events;
+        spdlog::warn("frame {} ({:.6f}): tracking lost", i, e.timestamp);
+      }
+      was_ok = false;
+    } else {
+      ++not_initialized;
+    }
+  }
+  progress.finish();
+  const double wall_s = ms_since(start) / 1000.0;
+  system.shutdown();
+
+  const Trajectory traj = system.trajectory();
+  write_tum_trajectory(opt.trajectory, traj);
+  if (!opt.keyframes.empty()) write_tum_trajectory(opt.keyframes, system.keyframe_trajectory());
+
+  const auto stats = system.mapping_stats();
+  const long processed = static_cast<long>(n) - out_of_order - unreadable_rgb;
+  const double frame_median = system.timer().median_ms("frame");
+  nlohmann::json j = {
+      {"frames", n},
+      {"processed_frames", processed},
+      {"tracked_frames", tracked},
+      {"lost_frames", lost + not_initialized},
+      {"not_initialized_frames", not_initialized},
+      {"lost_events", lost_events},
+      {"bad_input",
+       {{"unreadable_rgb", unreadable_rgb},
+        {"bad_depth", bad_depth},
+        {"timestamp_out_of_order", out_of_order},
+        {"no_features", no_features}}},
+      {"keyframes", system.keyframe_count()},
+      {"map_points", system.map_point_count()},
+      {"fps", wall_s > 0 ? static_cast<double>(processed) / wall_s : 0.0},
+      {"tracking_fps_median", frame_median > 0 ? 1000.0 / frame_median : 0.0},
+      {"wall_seconds", wall_s},
+      {"local_mapping",
+       {{"keyframes_processed", stats.keyframes_processed},
+        {"keyframes_culled", stats.keyframes_culled},
+        {"points_culled", stats.points_culled},
+        {"points_fused", stats.points_fused},
+        {"points_triangulated", stats.points_triangulated},
+        {"bundle_adjustments", stats.bundle_adjustments},
+        {"bundle_adjustments_aborted", stats.bundle_adjustments_aborted},
+        {"max_queue", stats.max_queue}}},
+      {"stage_ms", system.timer().summary()},
+      {"trajectory", opt.trajectory.string()},
+      {"trajectory_poses", traj.size()},
+  };
+  spdlog::info("slam: {} frames, {} tracked, {} lost, {} keyframes, {} map points, {:.1f} fps", n, tracked,
+               lost + not_initialized, system.keyframe_count(), system.map_point_count(), j["fps"].get<double>());
+  return j;
+}
+
+const bool registered = register_command({
+    .path = {"slam"},
+    .description = "RGB-D SLAM on a TUM-layout sequence: trajectory of every tracked frame and keyframes",
+    .setup = [](CLI::App& cmd) -> Action {
+      auto opt = std::make_shared<SlamOptions>();
+      cmd.add_option("--dataset", opt->dataset, "TUM RGB-D layout folder")->required();
+      cmd.add_option("--camera", opt->camera, "Camera settings (default DATASET/camera.yaml)");
+      cmd.add_option("--trajectory", opt->trajectory, "Output: TUM trajectory of tracked frames")->required();
+      cmd.add_option("--keyframes", opt->keyframes, "Output: TUM trajectory of the keyframes");
+      cmd.add_option("--max-frames", opt->max_frames, "Only the first N frames (0 = all)");
+      cmd.add_flag("--sync-mapping", opt->sync_mapping,
+                   "Run local mapping inline after each keyframe (deterministic, slower) instead of in its thread");
+      return [opt] { return run_slam(*opt); };
+    },
+    .order = 40});
+
+}  // namespace
+}  // namespace builtscene::app

@@ -1,0 +1,57 @@
+// ORB extraction, ours against OpenCV's cv::ORB, 1000 features on a 640x480 frame of
+// 7scenes-kitchen (or a generated texture when the shared data is absent). Counters report the
+// spread (fraction of a 32x24 grid covered) next to the time.
+#include <filesystem>
+
+#include <benchmark/benchmark.h>
+#include <opencv2/features2d.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "features/keypoint_distribution.hpp"
+#include "features/orb_extractor.hpp"
+
+namespace {
+
+cv::Mat test_frame() {
+  const auto dir = std::filesystem::path(BUILTSCENE_SOURCE_DIR) / "../shared/data/7scenes-kitchen/rgb";
+  const auto file = dir / "1010.000000.jpg";
+  if (std::filesystem::exists(file)) return cv::imread(file.string(), cv::IMREAD_GRAYSCALE);
+  if (std::filesystem::exists(dir)) {
+    for (const auto& e : std::filesystem::directory_iterator(dir)) return cv::imread(e.path().string(), cv::IMREAD_GRAYSCALE);
+  }
+  cv::Mat img(480, 640, CV_8UC1);
+  cv::randu(img, 0, 255);
+  cv::GaussianBlur(img, img, cv::Size(9, 9), 3);
+  return img;
+}
+
+void BM_OrbExtractor(benchmark::State& state) {
+  const cv::Mat img = test_frame();
+  builtscene::OrbExtractor orb;
+  std::vector<cv::KeyPoint> k;
+  cv::Mat d;
+  for (auto _ : state) {
+    orb.extract(img, k, d);
+    benchmark::DoNotOptimize(d.data);
+  }
+  state.counters["keypoints"] = static_cast<double>(k.size());
+  state.counters["grid_coverage"] = builtscene::grid_coverage(k, img.size(), 32, 24);
+}
+BENCHMARK(BM_OrbExtractor)->Unit(benchmark::kMillisecond);
+
+void BM_OpenCvOrb(benchmark::State& state) {
+  const cv::Mat img = test_frame();
+  auto orb = cv::ORB::create(1000, 1.2f, 8);
+  std::vector<cv::KeyPoint> k;
+  cv::Mat d;
+  for (auto _ : state) {
+    orb->detectAndCompute(img, cv::noArray(), k, d);
+    benchmark::DoNotOptimize(d.data);
+  }
+  state.counters["keypoints"] = static_cast<double>(k.size());
+  state.counters["grid_coverage"] = builtscene::grid_coverage(k, img.size(), 32, 24);
+}
+BENCHMARK(BM_OpenCvOrb)->Unit(benchmark::kMillisecond);
+
+}  // namespace

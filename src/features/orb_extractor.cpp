@@ -1,0 +1,243 @@
+#include "features/orb_extractor.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include <opencv2/features2d.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "core/errors.hpp"
+#include "core/settings_file.hpp"
+#include "features/keypoint_distribution.hpp"
+#include "features/orb_pattern.hpp"
+
+namespace builtscene {
+namespace {
+
+// Keypoints stay this far from the level's border: the orientation disk and the BRIEF
+// pattern both have radius 15, FAST needs 3 more pixels.
+constexpr int kBorder = kOrbPatchRadius + 1;
+// Cell size (pixels of the level) of the adaptive FAST threshold.
+constexpr int kThresholdCell = 32;
+
+}  // namespace
+
+OrbExtractorOptions OrbExtractorOptions::from_settings(const SettingsFile& s) {
+  OrbExtractorOptions o;
+  o.n_features = s.get_int("ORBextractor.nFeatures", o.n_features);
+  o.scale_factor = static_cast<float>(s.get_double("ORBextractor.scaleFactor", o.scale_factor));
+  o.n_levels = s.get_int("ORBextractor.nLevels", o.n_levels);
+  o.ini_th_fast = s.get_int("ORBextractor.iniThFAST", o.ini_th_fast);
+  o.min_th_fast = s.get_int("ORBextractor.minThFAST", o.min_th_fast);
+  try {
+    o.validate();
+  } catch (const InputError& e) {
+    throw InputError(located(s.path(), 0, e.what()));
+  }
+  return o;
+}
+
+void OrbExtractorOptions::validate() const {
+  if (n_features < 1 || n_features > 100000) throw InputError("ORBextractor.nFeatures must be in [1, 100000]");
+  if (!(scale_factor > 1.0f && scale_factor < 4.0f)) throw InputError("ORBextractor.scaleFactor must be in (1, 4)");
+  if (n_levels < 1 || n_levels > 20) throw InputError("ORBextractor.nLevels must be in [1, 20]");
+  if (ini_th_fast < 1 || ini_th_fast > 255) throw InputError("ORBextractor.iniThFAST must be in [1, 255]");
+  if (min_th_fast < 1 || min_th_fast > ini_th_fast) throw InputError("ORBextractor.minThFAST must be in [1, iniThFAST]");
+}
+
+ScalePyramid ScalePyramid::make(float scale_factor, int n_levels) {
+  ScalePyramid p;
+  p.scale_factor = scale_factor;
+  float s = 1.0f;
+  for (int l = 0; l < n_levels; ++l) {
+    p.scale.push_back(s);
+    p.inv_scale.push_back(1.0f / s);
+    p.sigma2.push_back(s * s);
+    p.inv_sigma2.push_back(1.0f / (s * s));
+    s *= scale_factor;
+  }
+  return p;
+}
+
+OrbExtractor::OrbExtractor(OrbExtractorOptions options) : options_(options) {
+  options_.validate();
+  pyramid_ = ScalePyramid::make(options_.scale_factor, options_.n_levels);
+  // Features per level proportional to the level's linear size (a geometric series in
+  // 1/scale_factor), the last level taking the remainder.
+  const double f = 1.0 / options_.scale_factor;
+  const int L = options_.n_levels;
+  double per = options_.n_features * (1.0 - f) / (1.0 - std::pow(f, L));
+  if (L == 1) per = options_.n_features;
+  int total = 0;
+  for (int l = 0; l < L - 1; ++l) {
+    const int n = static_cast<int>(std::lround(per));
+    features_per_level_.push_back(n);
+    total += n;
+    per *= f;
+  }
+  features_per_level_.push_back(std::max(0, options_.n_features - total));
+
+  // Circular patch: for each row offset v, the largest u with u^2 + v^2 <= r^2.
+  umax_.resize(kOrbPatchRadius + 1);
+  for (int v = 0; v <= kOrbPatchRadius; ++v)
+    umax_[static_cast<std::size_t>(v)] =
+        static_cast<int>(std::floor(std::sqrt(static_cast<double>(kOrbPatchRadius * kOrbPatchRadius - v * v)) + 1e-9));
+}
+
+void OrbExtractor::build_pyramid(const cv::Mat& gray) {
+  levels_.resize(static_cast<std::size_t>(options_.n_levels));
+  levels_[0] = gray;
+  for (int l = 1; l < options_.n_levels; ++l) {
+    const float inv = pyramid_.inv_scale[static_cast<std::size_t>(l)];
+    const cv::Size sz(static_cast<int>(std::lround(gray.cols * inv)), static_cast<int>(std::lround(gray.rows * inv)));
+    if (sz.width <= 2 * kBorder || sz.height <= 2 * kBorder) {
+      levels_[static_cast<std::size_t>(l)] = cv::Mat();
+      continue;
+    }
+    cv::resize(levels_[static_cast<std::size_t>(l - 1)], levels_[static_cast<std::size_t>(l)], sz, 0, 0, cv::INTER_LINEAR);
+  }
+}
+
+std::vector<cv::KeyPoint> OrbExtractor::detect_level(int level) const {
+  const cv::Mat& img = levels_[static_cast<std::size_t>(level)];
+  if (img.empty() || img.cols <= 2 * kBorder || img.rows <= 2 * kBorder) return {};
+  // FAST at ini_th_fast over the inner region; then, only in cells where nothing passed,
+  // FAST again at min_th_fast on that cell (plus the 3-pixel ring FAST needs). The second
+  // pass touches only low-contrast cells, which keeps the cost near one FAST pass.
+  const int x0 = kBorder - 3, y0 = kBorder - 3;
+  const cv::Rect inner(x0, y0, img.cols - 2 * x0, img.rows - 2 * y0);
+  std::vector<cv::KeyPoint> strong_kps;
+  cv::FAST(img(inner), strong_kps, options_.ini_th_fast, true, cv::FastFeatureDetector::TYPE_9_16);
+  const int cells_x = std::max(1, (img.cols - 2 * kBorder) / kThresholdCell);
+  const int cells_y = std::max(1, (img.rows - 2 * kBorder) / kThresholdCell);
+  const float cw = static_cast<float>(img.cols - 2 * kBorder) / static_cast<float>(cells_x);
+  const float ch = static_cast<float>(img.rows - 2 * kBorder) / static_cast<float>(cells_y);
+  auto inside = [&](const cv::KeyPoint& k) {
+    return k.pt.x >= kBorder && k.pt.y >= kBorder && k.pt.x < static_cast<float>(img.cols - kBorder) &&
+           k.pt.y < static_cast<float>(img.rows - kBorder);
+  };
+  std::vector<char> has_strong(static_cast<std::size_t>(cells_x * cells_y), 0);
+  std::vector<cv::KeyPoint> kept;
+  kept.reserve(strong_kps.size() + 256);
+  for (auto& k : strong_kps) {
+    k.pt.x += static_cast<float>(x0);
+    k.pt.y += static_cast<float>(y0);
+    if (!inside(k)) continue;
+    const int cx = std::min(cells_x - 1, static_cast<int>((k.pt.x - kBorder) / cw));
+    const int cy = std::min(cells_y - 1, static_cast<int>((k.pt.y - kBorder) / ch));
+    has_strong[static_cast<std::size_t>(cy * cells_x + cx)] = 1;
+    kept.push_back(k);
+  }
+  if (options_.min_th_fast < options_.ini_th_fast) {
+    std::vector<cv::KeyPoint> weak;
+    for (int cy = 0; cy < cells_y; ++cy) {
+      for (int cx = 0; cx < cells_x; ++cx) {
+        if (has_strong[static_cast<std::size_t>(cy * cells_x + cx)]) continue;
+        const int cell_x0 = kBorder + static_cast<int>(std::floor(static_cast<float>(cx) * cw));
+        const int cell_y0 = kBorder + static_cast<int>(std::floor(static_cast<float>(cy) * ch));
+        const int cell_x1 = cx == cells_x - 1 ? img.cols - kBorder : kBorder + static_cast<int>(std::floor(static_cast<float>(cx + 1) * cw));
+        const int cell_y1 = cy == cells_y - 1 ? img.rows - kBorder : kBorder + static_cast<int>(std::floor(static_cast<float>(cy + 1) * ch));
+        const cv::Rect roi(cell_x0 - 3, cell_y0 - 3, cell_x1 - cell_x0 + 6, cell_y1 - cell_y0 + 6);
+        weak.clear();
+        cv::FAST(img(roi), weak, options_.min_th_fast, true, cv::FastFeatureDetector::TYPE_9_16);
+        for (auto& k : weak) {
+          k.pt.x += static_cast<float>(roi.x);
+          k.pt.y += static_cast<float>(roi.y);
+          // Only the cell itself: the ring belongs to the neighbours.
+          if (k.pt.x < cell_x0 || k.pt.y < cell_y0 || k.pt.x >= cell_x1 || k.pt.y >= cell_y1) continue;
+          kept.push_back(k);
+        }
+      }
+    }
+  }
+  const cv::Rect2f bounds(static_cast<float>(kBorder), static_cast<float>(kBorder),
+                          static_cast<float>(img.cols - 2 * kBorder), static_cast<float>(img.rows - 2 * kBorder));
+  return distribute_quadtree(kept, bounds, features_per_level_[static_cast<std::size_t>(level)]);
+}
+
+float OrbExtractor::orientation(const cv::Mat& image, cv::Point2f pt) const {
+  const int x0 = cvRound(pt.x), y0 = cvRound(pt.y);
+  const std::uint8_t* center = image.ptr<std::uint8_t>(y0) + x0;
+  const int step = static_cast<int>(image.step1());
+  int m01 = 0, m10 = 0;
+  for (int u = -kOrbPatchRadius; u <= kOrbPatchRadius; ++u) m10 += u * center[u];
+  for (int v = 1; v <= kOrbPatchRadius; ++v) {
+    int v_sum = 0;
+    const int d = umax_[static_cast<std::size_t>(v)];
+    for (int u = -d; u <= d; ++u) {
+      const int below = center[u + v * step], above = center[u - v * step];
+      v_sum += below - above;
+      m10 += u * (below + above);
+    }
+    m01 += v * v_sum;
+  }
+  return cv::fastAtan2(static_cast<float>(m01), static_cast<float>(m10));
+}
+
+void OrbExtractor::describe_level(int l, std::vector<cv::KeyPoint>& kps, cv::Mat& desc) const {
+  desc.create(static_cast<int>(kps.size()), 32, CV_8UC1);
+  if (kps.empty()) return;
+  const cv::Mat& img = levels_[static_cast<std::size_t>(l)];
+  cv::Mat blurred;
+  cv::GaussianBlur(img, blurred, cv::Size(7, 7), 2, 2, cv::BORDER_REFLECT_101);
+  const auto& pattern = orb_brief_pattern();
+  const float scale = pyramid_.scale[static_cast<std::size_t>(l)];
+  const int step = static_cast<int>(blurred.step1());
+  int row = 0;
+  for (auto& k : kps) {
+    k.angle = orientation(img, k.pt);
+    const float a = k.angle * static_cast<float>(CV_PI / 180.0);
+    const float c = std::cos(a), s = std::sin(a);
+    const std::uint8_t* center = blurred.ptr<std::uint8_t>(cvRound(k.pt.y)) + cvRound(k.pt.x);
+    std::uint8_t* d = desc.ptr<std::uint8_t>(row++);
+    for (int b = 0; b < 32; ++b) {
+      std::uint8_t byte = 0;
+      for (int bit = 0; bit < 8; ++bit) {
+        const BriefPair& p = pattern[static_cast<std::size_t>(b * 8 + bit)];
+        const int u1 = cvRound(p.x1 * c - p.y1 * s), v1 = cvRound(p.x1 * s + p.y1 * c);
+        const int u2 = cvRound(p.x2 * c - p.y2 * s), v2 = cvRound(p.x2 * s + p.y2 * c);
+        byte |= static_cast<std::uint8_t>((center[v1 * step + u1] < center[v2 * step + u2]) << bit);
+      }
+      d[b] = byte;
+    }
+    k.octave = l;
+    k.size = 2.0f * kOrbPatchRadius * scale;
+    k.pt *= scale;
+  }
+}
+
+void OrbExtractor::extract(const cv::Mat& gray_in, std::vector<cv::KeyPoint>& keypoints, cv::Mat& descriptors) {
+  keypoints.clear();
+  descriptors.release();
+  if (gray_in.empty()) return;
+  CV_Assert(gray_in.type() == CV_8UC1);
+  build_pyramid(gray_in);
+
+  // Levels are independent once the pyramid exists: detection, orientation and description
+  // run per level, in parallel when allowed; the result does not depend on the thread count.
+  const auto L = static_cast<std::size_t>(options_.n_levels);
+  std::vector<std::vector<cv::KeyPoint>> per_level(L);
+  std::vector<cv::Mat> per_level_desc(L);
+  auto work = [&](const cv::Range& r) {
+    for (int l = r.start; l < r.end; ++l) {
+      per_level[static_cast<std::size_t>(l)] = detect_level(l);
+      describe_level(l, per_level[static_cast<std::size_t>(l)], per_level_desc[static_cast<std::size_t>(l)]);
+    }
+  };
+  if (options_.parallel_levels) cv::parallel_for_(cv::Range(0, options_.n_levels), work);
+  else work(cv::Range(0, options_.n_levels));
+
+  std::size_t total = 0;
+  for (const auto& v : per_level) total += v.size();
+  keypoints.reserve(total);
+  descriptors.create(static_cast<int>(total), 32, CV_8UC1);
+  int row = 0;
+  for (std::size_t l = 0; l < L; ++l) {
+    if (per_level[l].empty()) continue;
+    per_level_desc[l].copyTo(descriptors.rowRange(row, row + per_level_desc[l].rows));
+    row += per_level_desc[l].rows;
+    keypoints.insert(keypoints.end(), per_level[l].begin(), per_level[l].end());
+  }
+}
+
+}  // namespace builtscene

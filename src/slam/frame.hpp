@@ -1,0 +1,93 @@
+#pragma once
+// An RGB-D frame as tracking sees it: ORB keypoints (raw and undistorted), descriptors, the
+// depth of each keypoint and its virtual right-image coordinate u_R = u - bf / depth (the
+// "stereo" view ORB-SLAM gives RGB-D keypoints), a grid for fast area queries, the pose and
+// the map points matched to each keypoint.
+//
+// Ownership: a Frame belongs to the tracking thread alone and needs no lock. Its features
+// (FrameFeatures) never change after construction and are shared read-only with the keyframe
+// made from it. Its `points` may refer to map points whose mutable state is guarded by the
+// map lock (see map.hpp).
+#include <memory>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "core/camera.hpp"
+#include "core/se3.hpp"
+#include "features/descriptor.hpp"
+#include "features/orb_extractor.hpp"
+
+namespace builtscene::slam {
+
+class MapPoint;
+class KeyFrame;
+
+// What every frame of one sequence shares: camera, depth settings, scale pyramid, metric.
+struct FrameContext {
+  PinholeCamera camera;
+  double bf = 40.0;        // baseline times fx (pixels * metres)
+  double th_depth = 3.0;   // metres: closer keypoints are "close" (reliable depth)
+  ScalePyramid pyramid;
+  DescriptorMetric metric = DescriptorMetric::orb();
+  // Undistorted image bounds (the image corners undistorted), for projection checks.
+  float min_x = 0, max_x = 0, min_y = 0, max_y = 0;
+  static constexpr int kGridCols = 64;
+  static constexpr int kGridRows = 48;
+  float grid_scale_x = 0, grid_scale_y = 0;  // cells per pixel
+
+  static std::shared_ptr<const FrameContext> make(const RgbdCameraSettings& settings, const ScalePyramid& pyramid,
+                                                  const DescriptorMetric& metric);
+  bool in_image(double u, double v) const { return u >= min_x && u < max_x && v >= min_y && v < max_y; }
+};
+
+// The immutable per-frame measurements.
+struct FrameFeatures {
+  std::shared_ptr<const FrameContext> ctx;
+  std::vector<cv::KeyPoint> keys;     // as detected (distorted image)
+  std::vector<cv::KeyPoint> keys_un;  // undistorted
+  cv::Mat descriptors;                // one row per keypoint
+  std::vector<float> depth;           // metres, <= 0 when unknown
+  std::vector<float> u_right;         // virtual right coordinate, < 0 when unknown
+  // Keypoints binned by undistorted position: cell c holds grid_items[grid_start[c] .. grid_start[c+1]).
+  std::vector<int> grid_start, grid_items;
+
+  std::size_t size() const { return keys_un.size(); }
+  bool has_depth(std::size_t i) const { return depth[i] > 0; }
+  bool is_close(std::size_t i) const { return depth[i] > 0 && depth[i] < ctx->th_depth; }
+  // Keypoint indices within radius r of (u, v) (square window), octave in [min_level, max_level]
+  // (negative = any).
+  std::vector<int> in_area(float u, float v, float r, int min_level = -1, int max_level = -1) const;
+  // Camera-frame point of keypoint i from its depth (undistorted coordinates).
+  Eigen::Vector3d unproject(std::size_t i) const;
+};
+
+// Extracts ORB from `gray` and reads depth (metres, CV_32F, same size) at each keypoint.
+std::shared_ptr<const FrameFeatures> make_rgbd_features(const cv::Mat& gray, const cv::Mat& depth_m,
+                                                        std::shared_ptr<const FrameContext> ctx, OrbExtractor& extractor);
+
+class Frame {
+ public:
+  Frame(long id, double timestamp, std::shared_ptr<const FrameFeatures> features);
+
+  long id = 0;
+  double timestamp = 0;
+  std::shared_ptr<const FrameFeatures> f;
+  std::vector<std::shared_ptr<MapPoint>> points;  // per keypoint, null when unmatched
+  std::vector<char> outlier;                      // set by pose optimization
+
+  bool has_pose = false;
+  SE3 T_cw;  // world -> camera
+  std::shared_ptr<KeyFrame> reference;
+
+  void set_pose(const SE3& T) {
+    T_cw = T;
+    has_pose = true;
+  }
+  Eigen::Vector3d camera_center() const { return T_cw.inverse().translation(); }
+  std::size_t size() const { return f->size(); }
+  int matched_count() const;
+  void clear_matches();
+};
+
+}  // namespace builtscene::slam

@@ -1,0 +1,75 @@
+#pragma once
+// A keyframe: a frame kept in the map, with its map points, its place in the covisibility
+// graph (weights = shared map points) and in the spanning tree (parent = the keyframe it
+// shares most points with when it joins).
+//
+// Locking: `features`, `id`, `frame_id`, `timestamp` never change; every other member is
+// guarded by the Map's mutex. The Map owns keyframes. Covisibility and children use raw
+// pointers to keyframes in the map (a keyframe unlinks itself when it turns bad); the parent
+// is a shared_ptr so a culled keyframe keeps the chain needed to express frame poses
+// relative to it.
+#include <map>
+#include <memory>
+#include <set>
+#include <vector>
+
+#include "slam/frame.hpp"
+
+namespace builtscene::slam {
+
+class Map;
+
+class KeyFrame : public std::enable_shared_from_this<KeyFrame> {
+ public:
+  KeyFrame(long id, const Frame& frame);
+
+  const long id;
+  const long frame_id;
+  const double timestamp;
+  const std::shared_ptr<const FrameFeatures> f;
+
+  const SE3& pose() const { return T_cw_; }  // world -> camera
+  SE3 pose_inverse() const { return T_cw_.inverse(); }
+  Eigen::Vector3d camera_center() const { return T_wc_.translation(); }
+  void set_pose(const SE3& T_cw) {
+    T_cw_ = T_cw;
+    T_wc_ = T_cw.inverse();
+  }
+
+  std::vector<std::shared_ptr<MapPoint>> points;  // per keypoint, null when none
+
+  void add_point(int index, const std::shared_ptr<MapPoint>& p) { points[static_cast<std::size_t>(index)] = p; }
+  void erase_point(int index) { points[static_cast<std::size_t>(index)] = nullptr; }
+  // Non-bad map points observed by at least min_obs keyframes.
+  int tracked_points(int min_obs) const;
+  std::vector<std::shared_ptr<MapPoint>> good_points() const;
+
+  // Covisibility graph.
+  std::map<KeyFrame*, int> connections;
+  std::vector<KeyFrame*> ordered_connections;  // by weight, heaviest first
+  void update_connections(int min_weight = 15);
+  std::vector<KeyFrame*> best_covisibles(std::size_t n) const;
+  void add_connection(KeyFrame* other, int weight);
+  void erase_connection(KeyFrame* other);
+
+  // Spanning tree.
+  std::shared_ptr<KeyFrame> parent;
+  std::set<KeyFrame*> children;
+  bool has_parent_link = false;  // set once the keyframe joined the tree
+  SE3 T_cp;                      // pose relative to parent, frozen when this keyframe turns bad
+
+  bool bad = false;
+  bool keep = false;  // protected from culling (the first keyframe; later: loop candidates)
+  // Marks so a pass visits each keyframe once.
+  long local_map_mark = -1, ba_local_mark = -1, ba_fixed_mark = -1, fuse_mark = -1;
+
+  // Unlinks this keyframe from its points, its covisibility neighbours and the spanning
+  // tree (children move to its parent), and removes it from the map.
+  void set_bad(Map& map);
+
+ private:
+  SE3 T_cw_, T_wc_;
+  void sort_connections();
+};
+
+}  // namespace builtscene::slam

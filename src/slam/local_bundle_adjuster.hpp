@@ -1,0 +1,54 @@
+#pragma once
+// Bundle adjustment over a window of keyframes (local BA): the poses of the local keyframes
+// and the positions of the points they see are refined together, keyframes that only observe
+// those points stay fixed and anchor the gauge. Ceres with the Schur complement, Huber loss;
+// five iterations, then observations failing the chi-square test (or behind the camera) are
+// dropped and ten more iterations run without the robust loss, as ORB-SLAM does.
+//
+// The problem is plain data so it can be filled under the map lock, solved without it, and
+// written back under it (see LocalMapping), and tested on constructed configurations.
+#include <atomic>
+#include <vector>
+
+#include "core/se3.hpp"
+#include "slam/observation.hpp"
+
+namespace builtscene::slam {
+
+struct BundleAdjustmentProblem {
+  struct Camera {
+    SE3 T_cw;
+    bool fixed = false;
+  };
+  struct Measurement {
+    int camera = 0;
+    int point = 0;
+    Observation o;
+  };
+  Intrinsics K;
+  std::vector<Camera> cameras;
+  std::vector<Eigen::Vector3d> points;
+  std::vector<Measurement> measurements;
+};
+
+struct BundleAdjustmentOptions {
+  int first_iterations = 5;
+  int second_iterations = 10;
+};
+
+struct BundleAdjustmentResult {
+  std::vector<SE3> poses;                 // per camera (fixed ones unchanged)
+  std::vector<Eigen::Vector3d> points;
+  std::vector<bool> measurement_inlier;   // per measurement, after the final iterations
+  double initial_rms_px = 0;              // RMS reprojection error (pixels, all measurements)
+  double final_rms_px = 0;                // RMS over the inliers at the end
+  bool aborted = false;
+  bool solved = false;
+};
+
+// `abort` (optional) stops the solver between iterations when set, keeping the best state.
+BundleAdjustmentResult solve_bundle_adjustment(const BundleAdjustmentProblem& problem,
+                                               const BundleAdjustmentOptions& options = {},
+                                               const std::atomic<bool>* abort = nullptr);
+
+}  // namespace builtscene::slam

@@ -1,0 +1,28 @@
+#pragma once
+// One measurement of a 3D point in a camera, as both optimizers use it: the undistorted pixel,
+// optionally the virtual right coordinate (RGB-D keypoints with depth), and the information
+// 1 / sigma^2 of the keypoint's pyramid level.
+#include <Eigen/Core>
+
+namespace builtscene::slam {
+
+struct Intrinsics {
+  double fx = 0, fy = 0, cx = 0, cy = 0, bf = 0;
+};
+
+struct Observation {
+  Eigen::Vector2d uv = Eigen::Vector2d::Zero();
+  double u_right = -1;  // < 0: monocular measurement (2 residuals), else stereo (3)
+  double inv_sigma2 = 1;
+  bool stereo() const { return u_right >= 0; }
+};
+
+// ORB-SLAM's chi-square thresholds at 95 %: 2 and 3 degrees of freedom.
+constexpr double kChi2Mono = 5.991;
+constexpr double kChi2Stereo = 7.815;
+
+// Squared, information-weighted reprojection error of p_c (camera frame); infinity when the
+// point is not in front of the camera.
+double reprojection_chi2(const Intrinsics& K, const Observation& o, const Eigen::Vector3d& p_c);
+
+}  // namespace builtscene::slam

@@ -1,0 +1,39 @@
+#pragma once
+// Motion-only bundle adjustment: the camera pose that best explains 3D-2D (and, with depth,
+// 3D-stereo) matches. Ceres, Levenberg-Marquardt, Huber loss (delta = sqrt of the chi-square
+// threshold), four rounds of ten iterations after each of which every match is re-classified
+// inlier or outlier by the chi-square test at 95 %, as ORB-SLAM does; the robust loss is
+// dropped for the last two rounds, when the outliers are out.
+#include <vector>
+
+#include "core/se3.hpp"
+#include "slam/observation.hpp"
+
+namespace builtscene::slam {
+
+class Frame;
+
+struct PoseOptimizerOptions {
+  int rounds = 4;
+  int iterations = 10;
+  int min_inliers = 10;  // fewer inliers stop the rounds early
+};
+
+struct PoseOptimizationResult {
+  SE3 T_cw;
+  std::vector<bool> inlier;
+  int inliers = 0;
+  bool ok = false;  // enough matches to optimize at all
+};
+
+PoseOptimizationResult optimize_pose(const SE3& T_cw_initial, const std::vector<Eigen::Vector3d>& points_w,
+                                     const std::vector<Observation>& observations, const Intrinsics& K,
+                                     const PoseOptimizerOptions& options = {});
+
+// Optimizes frame.T_cw against its matched map points and sets frame.outlier; returns the
+// number of inliers. The caller holds the map lock (it reads map point positions).
+int optimize_frame_pose(Frame& frame, const PoseOptimizerOptions& options = {});
+
+Intrinsics intrinsics_of(const struct FrameContext& ctx);
+
+}  // namespace builtscene::slam

@@ -1,0 +1,355 @@
+#include "slam/tracking.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <unordered_map>
+
+#include "slam/key_frame.hpp"
+#include "slam/map.hpp"
+#include "slam/map_point.hpp"
+#include "slam/matcher.hpp"
+#include "slam/pose_optimizer.hpp"
+
+namespace builtscene::slam {
+
+const char* to_string(TrackingState s) {
+  switch (s) {
+    case TrackingState::kNotInitialized: return "not_initialized";
+    case TrackingState::kOk: return "ok";
+    case TrackingState::kLost: return "lost";
+  }
+  return "?";
+}
+
+Tracker::Tracker(std::shared_ptr<const FrameContext> ctx, Map& map, KeyFrameSink* sink, TrackingOptions options,
+                 StageTimer* timer)
+    : ctx_(std::move(ctx)), map_(map), sink_(sink), opt_(options), timer_(timer),
+      current_(0, 0, std::make_shared<FrameFeatures>()), last_(0, 0, std::make_shared<FrameFeatures>()) {}
+
+void Tracker::reset() {
+  state_ = TrackingState::kNotInitialized;
+  has_last_ = has_velocity_ = false;
+  reference_.reset();
+  local_keyframes_.clear();
+  local_points_.clear();
+}
+
+TrackingOutcome Tracker::track(Frame frame) {
+  current_ = std::move(frame);
+  TrackingOutcome out;
+  std::unique_lock lock(map_.mutex());
+  bool ok = false;
+  if (state_ == TrackingState::kNotInitialized) {
+    ok = initialize();
+    out.state = state_;
+    out.new_keyframe = ok;
+    out.inliers = ok ? current_.matched_count() : 0;
+  } else {
+    if (state_ == TrackingState::kOk) {
+      update_last_frame();
+      if (has_velocity_) {
+        ok = track_motion_model();
+        out.used_motion_model = ok;
+      }
+      if (!ok) ok = track_reference_keyframe();
+    } else {
+      // Lost: without relocalization (issue 5) the best chance is that the camera is still
+      // near the reference keyframe; try to match it each frame.
+      ok = track_reference_keyframe();
+    }
+    current_.reference = reference_;
+    if (ok) {
+      const auto start = std::chrono::steady_clock::now();
+      ok = track_local_map();
+      if (timer_) timer_->add("local_map", ms_since(start));
+    }
+    state_ = ok ? TrackingState::kOk : TrackingState::kLost;
+    out.state = state_;
+    out.inliers = ok ? inliers_ : 0;
+    if (ok) {
+      velocity_ = current_.T_cw * last_.T_cw.inverse();
+      has_velocity_ = true;
+      // Temporary (visual-odometry) matches do not count towards the map.
+      for (auto& p : current_.points)
+        if (p && p->observation_count() == 0) p = nullptr;
+      if (need_new_keyframe()) {
+        create_new_keyframe();
+        out.new_keyframe = true;
+      }
+      for (std::size_t i = 0; i < current_.points.size(); ++i)
+        if (current_.outlier[i]) current_.points[i] = nullptr;
+    } else {
+      has_velocity_ = false;
+    }
+  }
+  FrameRecord rec;
+  rec.timestamp = current_.timestamp;
+  rec.tracked = state_ == TrackingState::kOk;
+  if (rec.tracked && current_.reference) {
+    rec.reference = current_.reference;
+    rec.T_cr = current_.T_cw * current_.reference->pose_inverse();
+  }
+  records_.push_back(rec);
+  if (state_ == TrackingState::kOk) {
+    last_ = std::move(current_);
+    has_last_ = true;
+  }
+  return out;
+}
+
+bool Tracker::initialize() {
+  int with_depth = 0;
+  for (std::size_t i = 0; i < current_.size(); ++i) with_depth += current_.f->has_depth(i);
+  if (with_depth < opt_.min_init_points) return false;
+  current_.set_pose(SE3());
+  auto kf = std::make_shared<KeyFrame>(map_.next_keyframe_id(), current_);
+  kf->keep = true;
+  map_.add_keyframe(kf);
+  for (std::size_t i = 0; i < current_.size(); ++i) {
+    if (!current_.f->has_depth(i)) continue;
+    auto p = std::make_shared<MapPoint>(map_.next_point_id(), kf->pose_inverse() * current_.f->unproject(i), kf.get(), kf->id);
+    p->add_observation(kf.get(), static_cast<int>(i));
+    kf->add_point(static_cast<int>(i), p);
+    p->update_descriptor();
+    p->update_normal_and_depth();
+    map_.add_point(p);
+    current_.points[i] = p;
+  }
+  reference_ = kf;
+  current_.reference = kf;
+  last_kf_frame_id_ = current_.id;
+  local_keyframes_ = {kf};
+  local_points_ = kf->good_points();
+  state_ = TrackingState::kOk;
+  has_velocity_ = false;
+  if (sink_) sink_->insert_keyframe(kf);
+  return true;
+}
+
+void Tracker::update_last_frame() {
+  // The last frame's reference keyframe may have been moved by local BA since.
+  const auto& rec = records_.back();
+  if (rec.reference && !rec.reference->bad) last_.set_pose(rec.T_cr * rec.reference->pose());
+  // Temporary points from the last frame's depth (ORB-SLAM's visual odometry points): close
+  // keypoints without a map point get one, so the motion model has enough to match even
+  // where the map is thin. They never enter the map.
+  if (last_.id == last_kf_frame_id_) return;
+  std::vector<std::pair<float, std::size_t>> by_depth;
+  for (std::size_t i = 0; i < last_.size(); ++i)
+    if (last_.f->has_depth(i)) by_depth.emplace_back(last_.f->depth[i], i);
+  std::sort(by_depth.begin(), by_depth.end());
+  const SE3 T_wc = last_.T_cw.inverse();
+  int n = 0;
+  for (const auto& [z, i] : by_depth) {
+    const auto& p = last_.points[i];
+    if (!p || p->observation_count() < 1) {
+      auto tmp = std::make_shared<MapPoint>(-1, T_wc * last_.f->unproject(i), nullptr, -1);
+      tmp->descriptor = last_.f->descriptors.row(static_cast<int>(i)).clone();
+      last_.points[i] = tmp;
+      last_.outlier[i] = 0;
+    }
+    ++n;
+    if (z > ctx_->th_depth && n > opt_.new_kf_min_points) break;
+  }
+}
+
+int Tracker::discard_outliers() {
+  int real = 0;
+  for (std::size_t i = 0; i < current_.points.size(); ++i) {
+    if (!current_.points[i]) continue;
+    if (current_.outlier[i]) {
+      current_.points[i] = nullptr;
+      current_.outlier[i] = 0;
+    } else if (current_.points[i]->observation_count() > 0) {
+      ++real;
+    }
+  }
+  return real;
+}
+
+bool Tracker::track_motion_model() {
+  current_.set_pose(velocity_ * last_.T_cw);
+  current_.clear_matches();
+  int n = search_by_projection(current_, last_, opt_.motion_model_radius);
+  if (n < 20) {
+    current_.clear_matches();
+    n = search_by_projection(current_, last_, 2 * opt_.motion_model_radius);
+  }
+  if (n < 20) return false;
+  optimize_frame_pose(current_);
+  return discard_outliers() >= 10;
+}
+
+bool Tracker::track_reference_keyframe() {
+  if (!reference_ || reference_->bad) {
+    // The reference was culled: fall back to the newest keyframe in the map.
+    const auto kfs = map_.keyframes();
+    if (kfs.empty()) return false;
+    reference_ = kfs.back();
+  }
+  current_.clear_matches();
+  const int n = search_by_descriptor(*reference_, current_);
+  if (n < 15) return false;
+  current_.set_pose(has_last_ ? last_.T_cw : reference_->pose());
+  optimize_frame_pose(current_);
+  return discard_outliers() >= 10;
+}
+
+void Tracker::update_local_map() {
+  // Local keyframes: those sharing points with the frame, plus their best neighbours,
+  // children and parents (ORB-SLAM's UpdateLocalKeyFrames).
+  std::unordered_map<KeyFrame*, int> counter;
+  for (std::size_t i = 0; i < current_.points.size(); ++i) {
+    const auto& p = current_.points[i];
+    if (!p) continue;
+    if (p->bad) {
+      current_.points[i] = nullptr;
+      continue;
+    }
+    for (const auto& [kf, idx] : p->observations) ++counter[kf];
+  }
+  if (counter.empty()) return;
+  local_keyframes_.clear();
+  KeyFrame* best = nullptr;
+  int best_n = 0;
+  for (const auto& [kf, n] : counter) {
+    if (kf->bad) continue;
+    if (n > best_n || (n == best_n && best && kf->id > best->id)) {
+      best = kf;
+      best_n = n;
+    }
+    local_keyframes_.push_back(kf->shared_from_this());
+    kf->local_map_mark = current_.id;
+  }
+  const std::size_t direct = local_keyframes_.size();
+  for (std::size_t k = 0; k < direct && local_keyframes_.size() < 80; ++k) {
+    auto add = [&](KeyFrame* n) {
+      if (!n || n->bad || n->local_map_mark == current_.id) return false;
+      n->local_map_mark = current_.id;
+      local_keyframes_.push_back(n->shared_from_this());
+      return true;
+    };
+    KeyFrame* kf = local_keyframes_[k].get();
+    for (KeyFrame* n : kf->best_covisibles(10))
+      if (add(n)) break;
+    for (KeyFrame* c : kf->children)
+      if (add(c)) break;
+    add(kf->parent.get());
+  }
+  if (best) {
+    reference_ = best->shared_from_this();
+    current_.reference = reference_;
+  }
+  local_points_.clear();
+  for (const auto& kf : local_keyframes_) {
+    for (const auto& p : kf->points) {
+      if (!p || p->bad || p->local_map_mark == current_.id) continue;
+      p->local_map_mark = current_.id;
+      local_points_.push_back(p);
+    }
+  }
+}
+
+bool Tracker::track_local_map() {
+  update_local_map();
+  // Points already matched are visible; do not search them again.
+  for (auto& p : current_.points) {
+    if (!p) continue;
+    if (p->bad) {
+      p = nullptr;
+      continue;
+    }
+    ++p->visible;
+    p->track_mark = current_.id;  // already matched in this frame
+  }
+  const Intrinsics K = intrinsics_of(*ctx_);
+  const Eigen::Vector3d O = current_.camera_center();
+  std::vector<ProjectedPoint> candidates;
+  candidates.reserve(local_points_.size());
+  for (const auto& p : local_points_) {
+    if (p->track_mark == current_.id || p->bad) continue;
+    const Eigen::Vector3d pc = current_.T_cw * p->position;
+    if (pc.z() <= 0) continue;
+    const double inv_z = 1.0 / pc.z();
+    const double u = K.fx * pc.x() * inv_z + K.cx, v = K.fy * pc.y() * inv_z + K.cy;
+    if (!ctx_->in_image(u, v)) continue;
+    const Eigen::Vector3d po = p->position - O;
+    const double dist = po.norm();
+    if (dist < 0.8 * p->min_distance || dist > 1.2 * p->max_distance) continue;
+    const double view_cos = po.dot(p->normal) / dist;
+    if (view_cos < 0.5) continue;
+    ++p->visible;
+    candidates.push_back({p, static_cast<float>(u), static_cast<float>(v), static_cast<float>(u - K.bf * inv_z),
+                          p->predict_level(dist, ctx_->pyramid), static_cast<float>(view_cos)});
+  }
+  search_local_points(current_, candidates, opt_.local_map_radius);
+  optimize_frame_pose(current_);
+  inliers_ = 0;
+  for (std::size_t i = 0; i < current_.points.size(); ++i) {
+    const auto& p = current_.points[i];
+    if (!p || current_.outlier[i]) continue;
+    ++p->found;
+    if (p->observation_count() > 0) ++inliers_;
+  }
+  return inliers_ >= opt_.min_local_map_inliers;
+}
+
+bool Tracker::need_new_keyframe() const {
+  if (!reference_) return false;
+  const long since = current_.id - last_kf_frame_id_;
+  const std::size_t n_kfs = map_.keyframe_count();
+  const int min_obs = n_kfs <= 2 ? 2 : 3;
+  const int ref_matches = reference_->tracked_points(min_obs);
+  const bool mapping_idle = sink_ ? sink_->accepts_keyframes() : true;
+
+  int tracked_close = 0, untracked_close = 0;
+  for (std::size_t i = 0; i < current_.size(); ++i) {
+    if (!current_.f->is_close(i)) continue;
+    if (current_.points[i] && !current_.outlier[i]) ++tracked_close;
+    else ++untracked_close;
+  }
+  const bool need_close = tracked_close < opt_.min_tracked_close && untracked_close > opt_.min_untracked_close;
+  const float th_ref_ratio = n_kfs < 2 ? 0.4f : 0.75f;
+  const bool c1a = since >= opt_.max_frames_between_kf;
+  const bool c1b = since >= opt_.min_frames_between_kf && mapping_idle;
+  const bool c1c = inliers_ < ref_matches * 0.25f || need_close;
+  const bool c2 = (inliers_ < ref_matches * th_ref_ratio || need_close) && inliers_ > 15;
+  if (!((c1a || c1b || c1c) && c2)) return false;
+  if (mapping_idle || !sink_) return true;
+  sink_->interrupt_bundle_adjustment();
+  return sink_->queue_size() < 3;
+}
+
+void Tracker::create_new_keyframe() {
+  auto kf = std::make_shared<KeyFrame>(map_.next_keyframe_id(), current_);
+  for (std::size_t i = 0; i < current_.size(); ++i)
+    if (current_.points[i] && !current_.outlier[i] && !current_.points[i]->bad) kf->points[i] = current_.points[i];
+  // New map points from depth: all close keypoints, at least new_kf_min_points nearest ones.
+  std::vector<std::pair<float, std::size_t>> by_depth;
+  for (std::size_t i = 0; i < current_.size(); ++i)
+    if (current_.f->has_depth(i)) by_depth.emplace_back(current_.f->depth[i], i);
+  std::sort(by_depth.begin(), by_depth.end());
+  const SE3 T_wc = current_.T_cw.inverse();
+  int n = 0;
+  for (const auto& [z, i] : by_depth) {
+    if (!kf->points[i]) {
+      auto p = std::make_shared<MapPoint>(map_.next_point_id(), T_wc * current_.f->unproject(i), kf.get(), kf->id);
+      p->add_observation(kf.get(), static_cast<int>(i));
+      kf->add_point(static_cast<int>(i), p);
+      p->update_descriptor();
+      p->update_normal_and_depth();
+      map_.add_point(p);
+      current_.points[i] = p;
+      current_.outlier[i] = 0;
+    }
+    ++n;
+    if (z > ctx_->th_depth && n > opt_.new_kf_min_points) break;
+  }
+  map_.add_keyframe(kf);
+  reference_ = kf;
+  current_.reference = kf;
+  last_kf_frame_id_ = current_.id;
+  if (sink_) sink_->insert_keyframe(kf);
+}
+
+}  // namespace builtscene::slam

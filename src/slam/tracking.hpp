@@ -1,0 +1,104 @@
+#pragma once
+// The tracking thread's work for one frame (ORB-SLAM2's Tracking for RGB-D): initialization
+// from the first frame with enough depth, the constant-velocity motion model with projection
+// search, the fallback of matching against the reference keyframe, tracking of the local
+// map, pose optimization, and the keyframe decision. It runs in the thread that calls
+// System::track_rgbd (the caller's thread is the tracking thread, as in ORB-SLAM).
+//
+// Ownership: the Tracker owns the current and last Frame and its per-frame records; it takes
+// the map lock for the whole of a frame's matching and optimization (see map.hpp).
+#include <memory>
+#include <vector>
+
+#include "core/stage_timer.hpp"
+#include "slam/frame.hpp"
+
+namespace builtscene::slam {
+
+class Map;
+class KeyFrame;
+class KeyFrameSink;
+
+struct TrackingOptions {
+  int min_init_points = 500;       // keypoints with depth needed to start a map
+  int max_frames_between_kf = 30;  // ORB-SLAM: the camera fps
+  int min_frames_between_kf = 0;
+  int min_tracked_close = 100;     // "need close points" rule for RGB-D
+  int min_untracked_close = 70;
+  int new_kf_min_points = 100;     // new points from depth per keyframe (all close ones at least)
+  int min_local_map_inliers = 30;
+  float motion_model_radius = 15.0f;  // ORB-SLAM RGB-D
+  float local_map_radius = 3.0f;
+};
+
+enum class TrackingState { kNotInitialized, kOk, kLost };
+const char* to_string(TrackingState s);
+
+struct TrackingOutcome {
+  TrackingState state = TrackingState::kNotInitialized;
+  int inliers = 0;              // map points matched after local-map tracking
+  int keypoints = 0;            // features extracted from the frame
+  bool new_keyframe = false;
+  bool used_motion_model = false;
+};
+
+// Where new keyframes go (local mapping); an interface so tracking can be tested alone.
+class KeyFrameSink {
+ public:
+  virtual ~KeyFrameSink() = default;
+  virtual void insert_keyframe(std::shared_ptr<KeyFrame> kf) = 0;
+  virtual bool accepts_keyframes() const = 0;  // idle
+  virtual std::size_t queue_size() const = 0;
+  virtual void interrupt_bundle_adjustment() = 0;
+};
+
+class Tracker {
+ public:
+  Tracker(std::shared_ptr<const FrameContext> ctx, Map& map, KeyFrameSink* sink, TrackingOptions options,
+          StageTimer* timer = nullptr);
+
+  TrackingOutcome track(Frame frame);
+  TrackingState state() const { return state_; }
+
+  // One record per frame passed to track(): the pose relative to its reference keyframe, so
+  // the final trajectory follows later keyframe corrections (local BA, loop closing).
+  struct FrameRecord {
+    double timestamp = 0;
+    std::shared_ptr<KeyFrame> reference;
+    SE3 T_cr;
+    bool tracked = false;
+  };
+  const std::vector<FrameRecord>& records() const { return records_; }
+  void reset();
+
+ private:
+  std::shared_ptr<const FrameContext> ctx_;
+  Map& map_;
+  KeyFrameSink* sink_;
+  TrackingOptions opt_;
+  StageTimer* timer_;
+
+  TrackingState state_ = TrackingState::kNotInitialized;
+  Frame current_, last_;
+  bool has_last_ = false;
+  bool has_velocity_ = false;
+  SE3 velocity_;  // T_cur_last
+  std::shared_ptr<KeyFrame> reference_;
+  std::vector<std::shared_ptr<KeyFrame>> local_keyframes_;
+  std::vector<std::shared_ptr<MapPoint>> local_points_;
+  long last_kf_frame_id_ = 0;
+  int inliers_ = 0;
+  std::vector<FrameRecord> records_;
+
+  bool initialize();
+  void update_last_frame();
+  bool track_motion_model();
+  bool track_reference_keyframe();
+  bool track_local_map();
+  void update_local_map();
+  int discard_outliers();  // returns matches to real map points
+  bool need_new_keyframe() const;
+  void create_new_keyframe();
+};
+
+}  // namespace builtscene::slam
