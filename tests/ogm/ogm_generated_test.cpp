@@ -1,0 +1,89 @@
+// The occupancy grid on a generated world against the world's own geometry (label: slow).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+
+#include <nlohmann/json.hpp>
+
+#include "../common/run_cli.hpp"
+#include "ogm/map_server_io.hpp"
+
+namespace builtscene {
+namespace {
+
+namespace fs = std::filesystem;
+using testing::run_cli;
+using testing::shell_quote;
+
+const fs::path& lab_room() {
+  static const fs::path dir = [] {
+    const auto d = fs::temp_directory_path() / "bs_ogm_lab_room";
+    fs::remove_all(d);
+    const auto r = run_cli("synth rgbd --scene lab-room --motion robot --frames 450 --seed 3 --out " + shell_quote(d));
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    return d;
+  }();
+  return dir;
+}
+
+nlohmann::json build(const fs::path& out, const std::string& extra) {
+  const auto r = run_cli("ogm build --json --keyframes-only --dataset " + shell_quote(lab_room()) + " --poses " +
+                         shell_quote(lab_room() / "groundtruth.txt") + " --out " + shell_quote(out) + " " + extra);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  return r.exit_code == 0 ? nlohmann::json::parse(r.out) : nlohmann::json();
+}
+
+TEST(OgmGenerated, LabRoomFromGroundTruthMatchesTheTrueMap) {
+  const auto j = build(fs::temp_directory_path() / "bs_ogm_lab_map", "--truth " + shell_quote(lab_room() / "truth_map.yaml"));
+  ASSERT_TRUE(j.contains("score"));
+  EXPECT_GE(j["score"]["occupied_precision"].get<double>(), 0.90);
+  EXPECT_GE(j["score"]["occupied_recall"].get<double>(), 0.85);
+  EXPECT_GE(j["score"]["free_agreement"].get<double>(), 0.95);
+  EXPECT_GT(j["score"]["estimated_occupied"].get<int>(), 300);
+}
+
+// Inside a rotated box's footprint, at least `margin` from its edges.
+bool in_footprint(const nlohmann::json& box, const Eigen::Vector2d& p, double margin) {
+  const double yaw = box["yaw"].get<double>();
+  const Eigen::Vector2d c(box["center"][0].get<double>(), box["center"][1].get<double>());
+  const Eigen::Vector2d d = p - c;
+  const double u = std::cos(yaw) * d.x() + std::sin(yaw) * d.y(), v = -std::sin(yaw) * d.x() + std::cos(yaw) * d.y();
+  return std::abs(u) <= box["size"][0].get<double>() / 2 - margin && std::abs(v) <= box["size"][1].get<double>() / 2 - margin;
+}
+
+TEST(OgmGenerated, HeightBandSeesDeskTopsThatOneHeightMisses) {
+  const auto band = fs::temp_directory_path() / "bs_ogm_lab_band";
+  const auto one = fs::temp_directory_path() / "bs_ogm_lab_one_height";
+  build(band, "--world zup");
+  build(one, "--world zup --min-height 0.29 --max-height 0.31");  // a 2D lidar at 0.30 m
+  const OccupancyGrid a = load_map_server(fs::path(band.string() + ".yaml"));
+  const OccupancyGrid b = load_map_server(fs::path(one.string() + ".yaml"));
+  std::ifstream in(lab_room() / "scene.json");
+  const auto scene = nlohmann::json::parse(in);
+  std::vector<nlohmann::json> tops, legs;
+  for (const auto& box : scene["boxes"]) {
+    if (box["name"] == "desk_top") tops.push_back(box);
+    if (box["name"] == "desk_leg") legs.push_back(box);
+  }
+  ASSERT_FALSE(tops.empty());
+  // Cells under desk tops, 10 cm away from every leg: only the top can make them occupied.
+  int band_hits = 0, one_hits = 0, cells = 0;
+  for (int r = 0; r < a.height(); ++r)
+    for (int c = 0; c < a.width(); ++c) {
+      const Eigen::Vector2d p = a.center_of({c, r});
+      bool under_top = false, near_leg = false;
+      for (const auto& t : tops) under_top |= in_footprint(t, p, 0.0);
+      for (const auto& l : legs) near_leg |= in_footprint(l, p, -0.10);
+      if (!under_top || near_leg) continue;
+      ++cells;
+      band_hits += occupancy_class(a.at({c, r})) == 1;
+      one_hits += occupancy_class(b.value_at(p)) == 1;
+    }
+  ASSERT_GT(cells, 100);
+  EXPECT_GE(band_hits, 20) << "of " << cells << " cells under desk tops";
+  EXPECT_LE(one_hits, 2) << "of " << cells << " cells under desk tops";
+}
+
+}  // namespace
+}  // namespace builtscene
