@@ -267,6 +267,44 @@ json LcmCodec::decode(const uint8_t* data, std::size_t size) const {
   return Decoder(*types_, r).decode_struct(types_->get(type_));
 }
 
+namespace {
+// Bytes before `member` when every earlier member has a fixed size; -1 otherwise.
+long fixed_offset(const TypeRegistry& t, const LcmStruct& s, const std::string& member) {
+  long off = 8;
+  for (const auto& m : s.members) {
+    if (m.name == member) return m.primitive == Primitive::kInt64 && m.dims.empty() ? off : -1;
+    long size = 0;
+    switch (m.primitive) {
+      case Primitive::kInt8: case Primitive::kByte: case Primitive::kBoolean: size = 1; break;
+      case Primitive::kInt16: size = 2; break;
+      case Primitive::kInt32: case Primitive::kFloat: size = 4; break;
+      case Primitive::kInt64: case Primitive::kDouble: size = 8; break;
+      default: return -1;  // strings and nested structs vary
+    }
+    (void)t;
+    for (const auto& d : m.dims) {
+      if (d.variable) return -1;
+      size *= std::stol(d.size);
+    }
+    off += size;
+  }
+  return -1;
+}
+}  // namespace
+
+int64_t LcmCodec::read_int64(const uint8_t* data, std::size_t size, const std::string& member) const {
+  const long off = fixed_offset(*types_, types_->get(type_), member);
+  if (off < 0) {
+    const json v = decode(data, size);
+    return v.at(member).get<int64_t>();
+  }
+  if (peek_fingerprint(data, size) != fingerprint_) decode(data, size);  // throws with the details
+  if (size < static_cast<std::size_t>(off) + 8) throw InputError("malformed " + type_ + " message: truncated");
+  uint64_t v = 0;
+  for (long i = 0; i < 8; ++i) v = (v << 8) | data[off + i];
+  return static_cast<int64_t>(v);
+}
+
 json LcmCodec::zero() const { return zero_struct(*types_, types_->get(type_)); }
 
 uint64_t peek_fingerprint(const uint8_t* data, std::size_t size) {

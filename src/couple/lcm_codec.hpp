@@ -26,6 +26,10 @@ class LcmCodec {
   nlohmann::json decode(const uint8_t* data, std::size_t size) const;
   nlohmann::json decode(const std::vector<uint8_t>& bytes) const { return decode(bytes.data(), bytes.size()); }
 
+  // The int64 member `member` of an encoded message; fast when only fixed-size members
+  // precede it. Throws InputError on a foreign fingerprint.
+  int64_t read_int64(const uint8_t* data, std::size_t size, const std::string& member) const;
+
   // A value with every member zero / empty (variable arrays empty).
   nlohmann::json zero() const;
 
