@@ -56,6 +56,7 @@ const bool new_model = register_command({
 
 struct LaunchCliOptions {
   fs::path scenario, record;
+  std::string transport;
 };
 
 const bool launch_cmd = register_command({
@@ -65,8 +66,13 @@ const bool launch_cmd = register_command({
       auto o = std::make_shared<LaunchCliOptions>();
       cmd.add_option("scenario", o->scenario, "Scenario (YAML)")->required();
       cmd.add_option("--record", o->record, "Record every channel to this LCM log (lcm-logplayer replays it)");
+      cmd.add_option("--transport", o->transport, "Override the scenario's transport (udpm://..., memq://NAME)");
       return [o] {
-        const ScenarioConfig sc = load_scenario(o->scenario);
+        ScenarioConfig sc = load_scenario(o->scenario);
+        if (!o->transport.empty()) {
+          make_transport(o->transport);  // validates the URL before anything starts
+          sc.transport = o->transport;
+        }
         LaunchOptions lo;
         lo.record = o->record;
         lo.scenario_file = o->scenario;
@@ -84,7 +90,7 @@ const bool launch_cmd = register_command({
 
 struct RunModelOptions {
   fs::path scenario;
-  std::string model;
+  std::string model, transport;
 };
 
 const bool run_model = register_command({
@@ -94,8 +100,9 @@ const bool run_model = register_command({
       auto o = std::make_shared<RunModelOptions>();
       cmd.add_option("scenario", o->scenario, "Scenario (YAML)")->required();
       cmd.add_option("--model", o->model, "Model name")->required();
+      cmd.add_option("--transport", o->transport, "Transport URL (default: the scenario's)");
       return [o] {
-        const int rc = run_model_process(o->scenario, o->model);
+        const int rc = run_model_process(o->scenario, o->model, o->transport);
         if (rc != 0) throw Failure("model '" + o->model + "' stopped");
         return json{{"model", o->model}};
       };

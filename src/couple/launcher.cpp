@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <optional>
 #include <cstring>
 #include <thread>
 
@@ -49,6 +50,11 @@ class Monitor {
       if (it == statuses_.end()) return;
       if (s.step > it->second.step || s.state != it->second.state) last_progress_ = Clock::now();
       if (s.step >= it->second.step) it->second = std::move(s);
+      if (!all_started_) {
+        bool all = true;
+        for (const auto& [_, st] : statuses_) all = all && st.utime != 0;
+        if (all) all_started_ = Clock::now();
+      }
     } catch (const InputError&) {
     }
   }
@@ -97,16 +103,21 @@ class Monitor {
   std::unique_ptr<LcmLogWriter> log_;
   std::map<std::string, ModelStatus> statuses_;
   Clock::time_point last_progress_;
+
+ public:
+  std::optional<Clock::time_point> all_started_;  // every model has reported once
 };
 
 LaunchResult finish(const ScenarioConfig& sc, Monitor& mon, Clock::time_point start) {
   LaunchResult r;
-  r.seconds = std::chrono::duration<double>(Clock::now() - start).count();
+  const auto end = Clock::now();
+  r.seconds = std::chrono::duration<double>(end - start).count();
+  r.run_seconds = std::chrono::duration<double>(end - mon.all_started_.value_or(start)).count();
   for (const auto& m : sc.models) {
     r.steps = std::max(r.steps, m.steps());
     r.model_steps[m.name] = mon.statuses().at(m.name).step;
   }
-  r.steps_per_second = r.seconds > 0 ? static_cast<double>(r.steps) / r.seconds : 0;
+  r.steps_per_second = r.run_seconds > 0 ? static_cast<double>(r.steps) / r.run_seconds : 0;
   mon.flush();
   r.logged_events = mon.events();
   return r;
@@ -188,7 +199,7 @@ LaunchResult launch_processes(const ScenarioConfig& sc, const LaunchOptions& opt
     if (pid < 0) throw Failure("fork failed");
     if (pid == 0) {
       execl(exe.c_str(), exe.c_str(), "couple", "run-model", scenario.c_str(), "--model", m.name.c_str(),
-            static_cast<char*>(nullptr));
+            "--transport", sc.transport.c_str(), static_cast<char*>(nullptr));
       std::fprintf(stderr, "cannot run %s: %s\n", exe.c_str(), std::strerror(errno));
       _exit(127);
     }
@@ -268,7 +279,8 @@ void install_stop_signals() {
 }
 
 nlohmann::json LaunchResult::to_json() const {
-  return {{"models", model_steps}, {"steps", steps}, {"seconds", seconds}, {"steps_per_second", steps_per_second},
+  return {{"models", model_steps}, {"steps", steps}, {"seconds", seconds}, {"run_seconds", run_seconds},
+          {"steps_per_second", steps_per_second},
           {"logged_events", logged_events}};
 }
 
@@ -277,11 +289,12 @@ LaunchResult launch(const ScenarioConfig& sc, const LaunchOptions& opt) {
   return is_in_process(sc.transport) ? launch_threads(sc, opt) : launch_processes(sc, opt);
 }
 
-int run_model_process(const std::filesystem::path& scenario_file, const std::string& model) {
+int run_model_process(const std::filesystem::path& scenario_file, const std::string& model,
+                      const std::string& transport) {
   install_stop_signals();
   const ScenarioConfig sc = load_scenario(scenario_file);
   const ModelConfig& cfg = sc.model(model);
-  const std::string url = cfg.transport.empty() ? sc.transport : cfg.transport;
+  const std::string url = !transport.empty() ? transport : cfg.transport.empty() ? sc.transport : cfg.transport;
   auto tr = make_transport(url);
   WrapperOptions wo;
   wo.stop = &stop_flag();

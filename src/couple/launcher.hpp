@@ -7,6 +7,7 @@
 #include <atomic>
 #include <filesystem>
 #include <map>
+#include <optional>
 #include <nlohmann/json.hpp>
 #include <string>
 
@@ -23,8 +24,9 @@ struct LaunchOptions {
 
 struct LaunchResult {
   int64_t steps = 0;  // the longest model's steps
-  double seconds = 0;
-  double steps_per_second = 0;
+  double seconds = 0;      // wall time, model start-up included
+  double run_seconds = 0;  // from the moment every model reported to the end
+  double steps_per_second = 0;  // steps / run_seconds
   int64_t logged_events = 0;
   std::map<std::string, int64_t> model_steps;
   nlohmann::json to_json() const;
@@ -35,7 +37,9 @@ struct LaunchResult {
 LaunchResult launch(const ScenarioConfig& scenario, const LaunchOptions& options);
 
 // The body of one model process (`builtscene couple run-model`): returns the exit code.
-int run_model_process(const std::filesystem::path& scenario_file, const std::string& model);
+// `transport` overrides the scenario's (the launcher passes its own).
+int run_model_process(const std::filesystem::path& scenario_file, const std::string& model,
+                      const std::string& transport = "");
 
 // SIGINT/SIGTERM set this; wrappers and the launcher poll it.
 std::atomic<bool>& stop_flag();

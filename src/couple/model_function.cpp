@@ -114,7 +114,7 @@ class ExternalModel final : public ModelFunction {
     close(from_child[1]);
     to_ = fdopen(to_child[1], "w");
     from_ = fdopen(from_child[0], "r");
-    const json reply = call({{"init", cfg.parameters}});
+    const json reply = call({{"init", cfg.parameters}}, -1);
     if (!reply.value("ok", false)) throw Failure("model '" + cfg.name + "' did not start: " + reply.dump());
   }
   ~ExternalModel() override {
@@ -137,7 +137,7 @@ class ExternalModel final : public ModelFunction {
       for (const Bytes* b : inputs[i]) list.push_back(in_codecs_[i].decode(*b));
       req["inputs"][cfg_.subscribe[i].channel] = std::move(list);
     }
-    const json reply = call(req);
+    const json reply = call(req, n);
     if (reply.contains("error"))
       throw Failure("model '" + cfg_.name + "' failed at step " + std::to_string(n) + ": " + reply["error"].dump());
     for (std::size_t i = 0; i < outputs.size(); ++i) {
@@ -155,14 +155,28 @@ class ExternalModel final : public ModelFunction {
   }
 
  private:
-  json call(const json& req) {
+  [[noreturn]] void exited(int64_t n) {
+    int status = 0;
+    std::string how = "exited";
+    for (int i = 0; i < 200; ++i) {
+      if (waitpid(pid_, &status, WNOHANG) == pid_) {
+        pid_ = -1;
+        how = WIFEXITED(status) ? "exited with code " + std::to_string(WEXITSTATUS(status))
+                                : std::string("was killed by signal ") + strsignal(WTERMSIG(status));
+        break;
+      }
+      usleep(5000);
+    }
+    throw Failure("model '" + cfg_.name + "' (external program " + cfg_.command[0] + ") " + how +
+                  (n < 0 ? std::string(" while starting") : " at step " + std::to_string(n)));
+  }
+  json call(const json& req, int64_t n) {
     const std::string line = req.dump() + "\n";
-    if (std::fwrite(line.data(), 1, line.size(), to_) != line.size() || std::fflush(to_) != 0)
-      throw Failure("model '" + cfg_.name + "' (external program) exited");
+    if (std::fwrite(line.data(), 1, line.size(), to_) != line.size() || std::fflush(to_) != 0) exited(n);
     std::string reply;
     int c;
     while ((c = std::fgetc(from_)) != EOF && c != '\n') reply.push_back(static_cast<char>(c));
-    if (c == EOF && reply.empty()) throw Failure("model '" + cfg_.name + "' (external program) exited");
+    if (c == EOF && reply.empty()) exited(n);
     try {
       return json::parse(reply);
     } catch (const json::exception&) {
