@@ -76,10 +76,16 @@ class Monitor {
     for (const auto& [name, s] : statuses_) {
       if (s.state == ModelState::kDone) continue;
       r += (r.empty() ? "" : "; ") + std::string("model '") + name + "' at step " + std::to_string(s.step);
-      if (!s.waiting.empty())
+      if (!s.waiting.empty()) {
         r += " waits for channel '" + s.waiting[0].first + "' step " + std::to_string(s.waiting[0].second);
+        for (const auto& m : sc_.models)
+          for (const auto& p : m.publish)
+            if (p.channel == s.waiting[0].first) r += " (published by model '" + m.name + "')";
+      }
       else if (s.utime == 0)
         r += " never reported (did it start?)";
+      else if (s.state == ModelState::kRunning)
+        r += " (running; its last report)";
     }
     return r;
   }

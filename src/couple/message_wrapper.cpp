@@ -254,7 +254,10 @@ struct MessageWrapper::Impl {
           return;
         }
       }
-      if (tr.handle(20) == 0 && Clock::now() - last_status > std::chrono::milliseconds(20)) {
+      tr.handle(20);
+      // Report at most every 20 ms while blocked: consumers learn what to re-send, the
+      // launcher what everyone waits for.
+      if (Clock::now() - last_status > std::chrono::milliseconds(20)) {
         if (n < total)
           send_status(ModelState::kWaiting, &wait);
         else
@@ -266,6 +269,8 @@ struct MessageWrapper::Impl {
   }
 
   void compute() {
+    // A model stuck in its function still shows which step it is computing.
+    if (Clock::now() - last_status > std::chrono::milliseconds(100)) send_status(ModelState::kRunning, nullptr);
     try {
       fn->step(n, static_cast<double>(n) * cfg.dt, args, results);
       for (std::size_t i = 0; i < outputs.size(); ++i) {
