@@ -7,6 +7,9 @@
 #include <deque>
 #include <map>
 #include <mutex>
+#include <random>
+#include <sstream>
+#include <atomic>
 #include <vector>
 
 #include "core/errors.hpp"
@@ -48,7 +51,10 @@ class MemqBus {
 
 class MemqEndpoint final : public Transport {
  public:
-  explicit MemqEndpoint(std::string url, const std::string& name) : url_(std::move(url)), bus_(MemqBus::get(name)) {
+  // `drop` > 0 loses that fraction of the messages delivered to this endpoint (seeded),
+  // to test the wrapper's recovery from a lossy network.
+  MemqEndpoint(std::string url, const std::string& name, double drop, uint64_t seed)
+      : url_(std::move(url)), bus_(MemqBus::get(name)), drop_(drop), rng_(seed) {
     bus_->attach(this);
   }
   ~MemqEndpoint() override { bus_->detach(this); }
@@ -67,6 +73,7 @@ class MemqEndpoint final : public Transport {
   void deliver(const std::string& channel, const uint8_t* data, std::size_t size) {
     std::lock_guard lock(m_);
     if (all_.empty() && !handlers_.count(channel)) return;
+    if (drop_ > 0 && std::uniform_real_distribution<double>(0, 1)(rng_) < drop_) return;
     queue_.push_back({channel, std::vector<uint8_t>(data, data + size)});
     cv_.notify_one();
   }
@@ -94,7 +101,9 @@ class MemqEndpoint final : public Transport {
   };
   std::string url_;
   std::shared_ptr<MemqBus> bus_;
-  std::mutex m_;  // guards queue_ and handler registration; handlers run outside it
+  double drop_;
+  std::mt19937_64 rng_;
+  std::mutex m_;  // guards queue_, rng_ and handler registration; handlers run outside it
   std::condition_variable cv_;
   std::deque<Item> queue_;
   std::map<std::string, std::vector<Handler>> handlers_;
@@ -177,7 +186,31 @@ class LcmTransport final : public Transport {
 bool is_in_process(const std::string& url) { return url.rfind("memq://", 0) == 0; }
 
 std::unique_ptr<Transport> make_transport(const std::string& url) {
-  if (is_in_process(url)) return std::make_unique<MemqEndpoint>(url, url.substr(7));
+  if (is_in_process(url)) {
+    // memq://NAME[?drop=FRACTION&seed=N]
+    std::string name = url.substr(7), query;
+    if (auto q = name.find('?'); q != std::string::npos) {
+      query = name.substr(q + 1);
+      name = name.substr(0, q);
+    }
+    double drop = 0;
+    uint64_t seed = 1;
+    std::stringstream qs(query);
+    std::string kv;
+    while (std::getline(qs, kv, '&')) {
+      const auto eq = kv.find('=');
+      const std::string k = kv.substr(0, eq), v = eq == std::string::npos ? "" : kv.substr(eq + 1);
+      try {
+        if (k == "drop") drop = std::stod(v);
+        else if (k == "seed") seed = std::stoull(v);
+        else throw InputError("");
+      } catch (const std::exception&) {
+        throw InputError("transport '" + url + "': bad option '" + kv + "' (memq://NAME?drop=FRACTION&seed=N)");
+      }
+    }
+    static std::atomic<uint64_t> instance{0};
+    return std::make_unique<MemqEndpoint>(url, name, drop, seed * 1000003 + instance++);
+  }
   if (url.rfind("udpm://", 0) == 0) return std::make_unique<LcmTransport>(url);
   throw InputError("unknown transport '" + url + "' (use udpm://GROUP:PORT?ttl=0 or memq://NAME)");
 }
