@@ -15,6 +15,7 @@
 #include "couple/monolithic.hpp"
 #include "couple/prototype_generator.hpp"
 #include "couple/status.hpp"
+#include "couple/time_series_plot.hpp"
 #include "couple/transport.hpp"
 
 namespace builtscene::app {
@@ -166,6 +167,72 @@ const bool reference_cmd = register_command({
       };
     },
     .order = 40});
+
+struct PlotOptions {
+  std::vector<fs::path> logs;
+  fs::path scenario, out;
+  std::vector<std::string> labels;
+  std::vector<double> limits;
+  std::string limit_member;
+};
+
+const bool plot_cmd = register_command({
+    .path = {"couple", "plot"},
+    .description = "PNG plot of every numeric member of every channel, one curve per log",
+    .setup = [](CLI::App& cmd) -> Action {
+      auto o = std::make_shared<PlotOptions>();
+      cmd.add_option("logs", o->logs, "LCM logs (e.g. with and without control)")->required();
+      cmd.add_option("--scenario", o->scenario, "Scenario whose message types and time steps apply")->required();
+      cmd.add_option("--out", o->out, "PNG file")->required();
+      cmd.add_option("--labels", o->labels, "Curve labels, one per log (default: file names)");
+      cmd.add_option("--limit", o->limit_member, "Draw +-LIMIT lines on this member, e.g. --limit A=1.5");
+      return [o] {
+        const ScenarioConfig sc = load_scenario(o->scenario);
+        std::map<std::string, double> dt;
+        for (const auto& m : sc.models)
+          for (const auto& p : m.publish) dt[p.channel] = m.dt;
+        std::string lim_member;
+        double lim = 0;
+        if (!o->limit_member.empty()) {
+          const auto eq = o->limit_member.find('=');
+          if (eq == std::string::npos) throw InputError("--limit: expected MEMBER=VALUE, got '" + o->limit_member + "'");
+          lim_member = o->limit_member.substr(0, eq);
+          lim = std::stod(o->limit_member.substr(eq + 1));
+        }
+        const int colors[][3] = {{150, 150, 150}, {20, 90, 200}, {200, 60, 20}, {20, 150, 60}};
+        std::map<std::string, Panel> panels;  // "CHANNEL.member"
+        std::vector<std::string> order;
+        for (std::size_t i = 0; i < o->logs.size(); ++i) {
+          const auto channels = read_log_channels(o->logs[i], sc.types);
+          for (const auto& [ch, steps] : channels) {
+            if (steps.empty()) continue;
+            for (const auto& [member, v] : steps.begin()->second.items()) {
+              if (member == kStepField || !v.is_number()) continue;
+              const std::string key = ch + "." + member;
+              if (!panels.count(key)) {
+                order.push_back(key);
+                panels[key].title = key;
+                if (member == lim_member) panels[key].limits = {-lim, lim};
+              }
+              Curve c;
+              c.label = i < o->labels.size() ? o->labels[i] : o->logs[i].filename().string();
+              c.y = member_series(steps, member);
+              for (std::size_t k = 0; k < c.y.size(); ++k) c.x.push_back(static_cast<double>(k) * dt[ch]);
+              c.r = colors[i % 4][0];
+              c.g = colors[i % 4][1];
+              c.b = colors[i % 4][2];
+              panels[key].curves.push_back(std::move(c));
+            }
+          }
+        }
+        std::vector<Panel> list;
+        for (const auto& k : order) list.push_back(panels[k]);
+        if (list.empty()) throw InputError("nothing to plot: no numeric members in the logs' known channels");
+        plot_panels(list, "t [s]", o->out);
+        return json{{"out", o->out.string()}, {"panels", order}};
+      };
+    },
+    .order = 45});
 
 struct SpyOptions {
   std::string url = "udpm://239.255.76.67:7667?ttl=0";

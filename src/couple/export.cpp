@@ -64,32 +64,45 @@ void write_csv(const std::filesystem::path& file, const std::vector<json>& rows)
   if (!out) throw Failure(located(file, 0, "write failed"));
 }
 
-ExportSummary export_log_csv(const std::filesystem::path& log, const TypeRegistry& types,
-                             const std::filesystem::path& out_dir) {
+ChannelSteps read_log_channels(const std::filesystem::path& log, const TypeRegistry& types,
+                               std::map<std::string, int64_t>* skipped) {
   std::map<uint64_t, std::string> by_fp;
   for (const auto& n : types.names()) by_fp[types.fingerprint(n)] = n;
   LcmLogReader reader(log);
-  std::map<std::string, std::vector<json>> rows;
-  std::map<std::string, std::set<int64_t>> seen;
-  ExportSummary summary;
+  ChannelSteps out;
+  std::map<std::string, int64_t> unnumbered;
   while (auto e = reader.next()) {
     if (e->channel == kStatusChannel) continue;
     auto it = by_fp.find(peek_fingerprint(e->data.data(), e->data.size()));
     if (it == by_fp.end()) {
-      ++summary.skipped[e->channel];
+      if (skipped) ++(*skipped)[e->channel];
       continue;
     }
     json v = LcmCodec(types, it->second).decode(e->data);
-    if (v.contains(kStepField) && !seen[e->channel].insert(v[kStepField].get<int64_t>()).second) continue;
-    rows[e->channel].push_back(std::move(v));
+    // Messages without a step are kept in arrival order.
+    const int64_t step = v.contains(kStepField) ? v[kStepField].get<int64_t>() : unnumbered[e->channel]++;
+    out[e->channel].emplace(step, std::move(v));
   }
+  return out;
+}
+
+std::vector<double> member_series(const std::map<int64_t, json>& steps, const std::string& member) {
+  std::vector<double> out;
+  for (const auto& [n, v] : steps)
+    if (n >= 0 && v.contains(member) && v[member].is_number()) out.push_back(v[member].get<double>());
+  return out;
+}
+
+ExportSummary export_log_csv(const std::filesystem::path& log, const TypeRegistry& types,
+                             const std::filesystem::path& out_dir) {
+  ExportSummary summary;
+  const ChannelSteps channels = read_log_channels(log, types, &summary.skipped);
   std::filesystem::create_directories(out_dir);
-  for (auto& [ch, r] : rows) {
-    std::stable_sort(r.begin(), r.end(), [](const json& a, const json& b) {
-      return a.value(kStepField, int64_t{0}) < b.value(kStepField, int64_t{0});
-    });
-    write_csv(out_dir / (ch + ".csv"), r);
-    summary.rows[ch] = static_cast<int64_t>(r.size());
+  for (const auto& [ch, steps] : channels) {
+    std::vector<json> rows;
+    for (const auto& [n, v] : steps) rows.push_back(v);
+    write_csv(out_dir / (ch + ".csv"), rows);
+    summary.rows[ch] = static_cast<int64_t>(rows.size());
   }
   return summary;
 }

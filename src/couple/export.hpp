@@ -20,6 +20,15 @@ struct ExportSummary {
 ExportSummary export_log_csv(const std::filesystem::path& log, const TypeRegistry& types,
                              const std::filesystem::path& out_dir);
 
+// channel -> producer step -> decoded message (the first of re-published duplicates);
+// messages of types not in `types` (and the status channel) are counted in `skipped`.
+using ChannelSteps = std::map<std::string, std::map<int64_t, nlohmann::json>>;
+ChannelSteps read_log_channels(const std::filesystem::path& log, const TypeRegistry& types,
+                               std::map<std::string, int64_t>* skipped = nullptr);
+
+// One numeric member of a channel, in step order (steps >= 0).
+std::vector<double> member_series(const std::map<int64_t, nlohmann::json>& steps, const std::string& member);
+
 // Flattens a decoded message into (column, value) pairs in member order.
 void flatten(const nlohmann::json& v, const std::string& prefix, std::vector<std::pair<std::string, nlohmann::json>>& out);
 

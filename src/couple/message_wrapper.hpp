@@ -20,8 +20,8 @@
 namespace builtscene::couple {
 
 struct WrapperOptions {
-  int window = 64;        // producer steps a producer may run ahead of a consumer's need
-  int status_every = 8;   // steps between status reports while running
+  int window = 256;       // producer steps a producer may run ahead of a consumer's need
+  int status_every = 32;  // steps between status reports while running
   int republish_ms = 10;  // minimum interval between re-publishing to a waiting consumer
   double linger_seconds = 10;  // after the last step, serve consumers at most this long
   const std::atomic<bool>* stop = nullptr;
