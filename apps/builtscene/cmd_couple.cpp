@@ -92,6 +92,7 @@ const bool launch_cmd = register_command({
 struct RunModelOptions {
   fs::path scenario;
   std::string model, transport;
+  bool recorder = false;
 };
 
 const bool run_model = register_command({
@@ -102,8 +103,9 @@ const bool run_model = register_command({
       cmd.add_option("scenario", o->scenario, "Scenario (YAML)")->required();
       cmd.add_option("--model", o->model, "Model name")->required();
       cmd.add_option("--transport", o->transport, "Transport URL (default: the scenario's)");
+      cmd.add_flag("--recorder", o->recorder, "The launcher records: re-send lost messages to it too");
       return [o] {
-        const int rc = run_model_process(o->scenario, o->model, o->transport);
+        const int rc = run_model_process(o->scenario, o->model, o->transport, o->recorder);
         if (rc != 0) throw Failure("model '" + o->model + "' stopped");
         return json{{"model", o->model}};
       };

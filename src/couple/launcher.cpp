@@ -7,10 +7,13 @@
 #include <chrono>
 #include <optional>
 #include <cstring>
+#include <limits>
+#include <set>
 #include <thread>
 
 #include "core/errors.hpp"
 #include "core/logging.hpp"
+#include "couple/lcm_codec.hpp"
 #include "couple/lcm_log.hpp"
 #include "couple/message_wrapper.hpp"
 #include "couple/status.hpp"
@@ -37,13 +40,47 @@ class Monitor {
     for (const auto& m : sc.models) {
       statuses_[m.name].model = m.name;
       statuses_[m.name].steps = m.steps();
+      if (log_)
+        for (const auto& p : m.publish)
+          recorded_.emplace(p.channel, Recorded{LcmCodec(sc.types, p.type), {}, p.initial ? -1 : 0, m.steps(), m.name});
     }
     last_progress_ = Clock::now();
   }
 
+  // The recorder's own status: per channel the first step it has not logged, and a wait
+  // for it when a later one arrived (a gap: lost on the network). Producers re-send.
+  void report_recorder(Transport& tr) {
+    if (recorded_.empty() || Clock::now() - last_report_ < std::chrono::milliseconds(5)) return;
+    last_report_ = Clock::now();
+    ModelStatus s;
+    s.model = kRecorderName;
+    s.utime = now_us();
+    bool complete = true;
+    for (auto& [ch, r] : recorded_) {
+      while (r.steps.count(r.next)) r.steps.erase(r.next++);
+      if (r.next < r.total) complete = false;
+      s.needs.emplace_back(ch, r.next >= r.total ? std::numeric_limits<int64_t>::max() : r.next);
+      // A gap, or the producer is past a step we never got: ask for it.
+      if (r.next < r.total && (!r.steps.empty() || statuses_.at(r.producer).step > r.next))
+        s.waiting.emplace_back(ch, r.next);
+    }
+    s.state = complete ? ModelState::kDone : ModelState::kRunning;
+    const auto bytes = encode_status(sc_.types, s);
+    tr.publish(kStatusChannel, bytes.data(), bytes.size());
+  }
+
   void on_message(const std::string& ch, const uint8_t* d, std::size_t n) {
     if (log_) log_->write(now_us(), ch, d, n);
-    if (ch != kStatusChannel) return;
+    if (ch != kStatusChannel) {
+      auto it = recorded_.find(ch);
+      if (it != recorded_.end()) {
+        try {
+          it->second.steps.insert(it->second.codec.read_int64(d, n, kStepField));
+        } catch (const InputError&) {
+        }
+      }
+      return;
+    }
     try {
       ModelStatus s = decode_status(sc_.types, d, n);
       auto it = statuses_.find(s.model);
@@ -70,6 +107,8 @@ class Monitor {
     return std::nullopt;
   }
   double idle_seconds() const { return std::chrono::duration<double>(Clock::now() - last_progress_).count(); }
+  // Start-up (loading plugins, starting interpreters) gets more time than a step.
+  bool stalled(double timeout) const { return idle_seconds() > (all_started_ ? timeout : 3 * timeout + 10); }
 
   std::string stall_report() const {
     std::string r;
@@ -105,8 +144,17 @@ class Monitor {
   }
 
  private:
+  struct Recorded {
+    LcmCodec codec;
+    std::set<int64_t> steps;  // logged beyond `next`
+    int64_t next;             // first step not yet logged
+    int64_t total;
+    std::string producer;
+  };
   const ScenarioConfig& sc_;
   std::unique_ptr<LcmLogWriter> log_;
+  std::map<std::string, Recorded> recorded_;
+  Clock::time_point last_report_{};
   std::map<std::string, ModelStatus> statuses_;
   Clock::time_point last_progress_;
 
@@ -143,6 +191,7 @@ LaunchResult launch_threads(const ScenarioConfig& sc, const LaunchOptions& opt) 
     WrapperOptions wo;
     wo.stop = &stop;
     wo.linger_seconds = sc.timeout_seconds;
+    wo.recorder = !opt.record.empty();
     wrappers.push_back(std::make_unique<MessageWrapper>(sc, cfg.name, *transports.back(),
                                                         load_model_function(cfg, sc.types), wo));
   }
@@ -163,10 +212,11 @@ LaunchResult launch_threads(const ScenarioConfig& sc, const LaunchOptions& opt) 
   }
   std::string failure;
   while (running > 0) {
-    tr->handle(50);
+    tr->handle(20);
+    mon.report_recorder(*tr);
     mon.show(false);
     if (stop_flag()) failure = "interrupted";
-    else if (mon.idle_seconds() > sc.timeout_seconds)
+    else if (mon.stalled(sc.timeout_seconds))
       failure = "no model advanced for " + std::to_string(sc.timeout_seconds) + " s: " + mon.stall_report();
     if (!failure.empty()) {
       stop = true;
@@ -205,7 +255,8 @@ LaunchResult launch_processes(const ScenarioConfig& sc, const LaunchOptions& opt
     if (pid < 0) throw Failure("fork failed");
     if (pid == 0) {
       execl(exe.c_str(), exe.c_str(), "couple", "run-model", scenario.c_str(), "--model", m.name.c_str(),
-            "--transport", sc.transport.c_str(), static_cast<char*>(nullptr));
+            "--transport", sc.transport.c_str(), opt.record.empty() ? nullptr : "--recorder",
+            static_cast<char*>(nullptr));
       std::fprintf(stderr, "cannot run %s: %s\n", exe.c_str(), std::strerror(errno));
       _exit(127);
     }
@@ -231,7 +282,8 @@ LaunchResult launch_processes(const ScenarioConfig& sc, const LaunchOptions& opt
     }
   };
   while (!children.empty()) {
-    tr->handle(50);
+    tr->handle(20);
+    mon.report_recorder(*tr);
     mon.show(false);
     reap(false);
     if (!failure.empty()) break;
@@ -243,7 +295,7 @@ LaunchResult launch_processes(const ScenarioConfig& sc, const LaunchOptions& opt
       failure = "interrupted";
       break;
     }
-    if (mon.idle_seconds() > sc.timeout_seconds) {
+    if (mon.stalled(sc.timeout_seconds)) {
       failure = "no model advanced for " + std::to_string(static_cast<int>(sc.timeout_seconds)) + " s: " + mon.stall_report();
       break;
     }
@@ -296,7 +348,7 @@ LaunchResult launch(const ScenarioConfig& sc, const LaunchOptions& opt) {
 }
 
 int run_model_process(const std::filesystem::path& scenario_file, const std::string& model,
-                      const std::string& transport) {
+                      const std::string& transport, bool recorder) {
   install_stop_signals();
   const ScenarioConfig sc = load_scenario(scenario_file);
   const ModelConfig& cfg = sc.model(model);
@@ -305,6 +357,7 @@ int run_model_process(const std::filesystem::path& scenario_file, const std::str
   WrapperOptions wo;
   wo.stop = &stop_flag();
   wo.linger_seconds = sc.timeout_seconds;
+  wo.recorder = recorder;
   MessageWrapper w(sc, model, *tr, load_model_function(cfg, sc.types), wo);
   w.run();
   return w.stopped() ? 130 : 0;

@@ -39,7 +39,7 @@ LaunchResult launch(const ScenarioConfig& scenario, const LaunchOptions& options
 // The body of one model process (`builtscene couple run-model`): returns the exit code.
 // `transport` overrides the scenario's (the launcher passes its own).
 int run_model_process(const std::filesystem::path& scenario_file, const std::string& model,
-                      const std::string& transport = "");
+                      const std::string& transport = "", bool recorder = false);
 
 // SIGINT/SIGTERM set this; wrappers and the launcher poll it.
 std::atomic<bool>& stop_flag();

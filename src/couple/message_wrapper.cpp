@@ -84,6 +84,7 @@ struct MessageWrapper::Impl {
           if (sub.channel == p.channel)
             out.consumers.push_back({m.name, &m, &sub, sub.expected_step(0) - (sub.history - 1)});
       }
+      if (opt.recorder) out.consumers.push_back({kRecorderName, nullptr, nullptr, p.initial ? -1 : 0});
       outputs.push_back(std::move(out));
     }
     for (const auto& sub : cfg.subscribe) {
@@ -144,6 +145,7 @@ struct MessageWrapper::Impl {
     const auto now = Clock::now();
     if (now - out.last_republish < std::chrono::milliseconds(opt.republish_ms)) return;
     out.last_republish = now;
+    spdlog::debug("{}: re-sending {} from step {}", cfg.name, out.pub->channel, from);
     int count = 0;
     for (auto it = out.retained.lower_bound(from); it != out.retained.end() && count < opt.window; ++it, ++count)
       tr.publish(out.pub->channel, it->second.data(), it->second.size());

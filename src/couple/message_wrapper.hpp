@@ -25,6 +25,9 @@ struct WrapperOptions {
   int republish_ms = 10;  // minimum interval between re-publishing to a waiting consumer
   double linger_seconds = 10;  // after the last step, serve consumers at most this long
   const std::atomic<bool>* stop = nullptr;
+  // The launcher records the run: treat its recorder (status name kRecorderName) as a
+  // consumer of every output, so lost messages are re-sent to it too.
+  bool recorder = false;
   // Called after each step with the step's outputs (used by tests and the monolithic check).
   std::function<void(int64_t step)> on_step;
 };

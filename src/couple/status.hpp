@@ -14,6 +14,7 @@ namespace builtscene::couple {
 
 inline constexpr const char* kStatusChannel = "BUILTSCENE_STATUS";
 inline constexpr const char* kStatusType = "builtscene.status_t";
+inline constexpr const char* kRecorderName = "(recorder)";
 
 enum class ModelState : int8_t { kRunning = 0, kWaiting = 1, kDone = 2, kFailed = 3, kStopped = 4 };
 const char* state_name(ModelState s);
