@@ -1,0 +1,366 @@
+#include "couple/launcher.hpp"
+
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <optional>
+#include <cstring>
+#include <limits>
+#include <set>
+#include <thread>
+
+#include "core/errors.hpp"
+#include "core/logging.hpp"
+#include "couple/lcm_codec.hpp"
+#include "couple/lcm_log.hpp"
+#include "couple/message_wrapper.hpp"
+#include "couple/status.hpp"
+#include "couple/transport.hpp"
+
+namespace builtscene::couple {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+int64_t now_us() {
+  return std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::system_clock::now().time_since_epoch())
+      .count();
+}
+
+void on_signal(int) { stop_flag().store(true); }
+
+// Watches statuses and channel traffic; records everything.
+class Monitor {
+ public:
+  Monitor(const ScenarioConfig& sc, Transport& tr, const std::filesystem::path& record) : sc_(sc) {
+    if (!record.empty()) log_ = std::make_unique<LcmLogWriter>(record);
+    tr.subscribe("", [this](const std::string& ch, const uint8_t* d, std::size_t n) { on_message(ch, d, n); });
+    for (const auto& m : sc.models) {
+      statuses_[m.name].model = m.name;
+      statuses_[m.name].steps = m.steps();
+      if (log_)
+        for (const auto& p : m.publish)
+          recorded_.emplace(p.channel, Recorded{LcmCodec(sc.types, p.type), {}, p.initial ? -1 : 0, m.steps(), m.name});
+    }
+    last_progress_ = Clock::now();
+  }
+
+  // The recorder's own status: per channel the first step it has not logged, and a wait
+  // for it when a later one arrived (a gap: lost on the network). Producers re-send.
+  void report_recorder(Transport& tr) {
+    if (recorded_.empty() || Clock::now() - last_report_ < std::chrono::milliseconds(5)) return;
+    last_report_ = Clock::now();
+    ModelStatus s;
+    s.model = kRecorderName;
+    s.utime = now_us();
+    bool complete = true;
+    for (auto& [ch, r] : recorded_) {
+      while (r.steps.count(r.next)) r.steps.erase(r.next++);
+      if (r.next < r.total) complete = false;
+      s.needs.emplace_back(ch, r.next >= r.total ? std::numeric_limits<int64_t>::max() : r.next);
+      // A gap, or the producer is past a step we never got: ask for it.
+      if (r.next < r.total && (!r.steps.empty() || statuses_.at(r.producer).step > r.next))
+        s.waiting.emplace_back(ch, r.next);
+    }
+    s.state = complete ? ModelState::kDone : ModelState::kRunning;
+    const auto bytes = encode_status(sc_.types, s);
+    tr.publish(kStatusChannel, bytes.data(), bytes.size());
+  }
+
+  void on_message(const std::string& ch, const uint8_t* d, std::size_t n) {
+    if (log_) log_->write(now_us(), ch, d, n);
+    if (ch != kStatusChannel) {
+      auto it = recorded_.find(ch);
+      if (it != recorded_.end()) {
+        try {
+          it->second.steps.insert(it->second.codec.read_int64(d, n, kStepField));
+        } catch (const InputError&) {
+        }
+      }
+      return;
+    }
+    try {
+      ModelStatus s = decode_status(sc_.types, d, n);
+      auto it = statuses_.find(s.model);
+      if (it == statuses_.end()) return;
+      if (s.step > it->second.step || s.state != it->second.state) last_progress_ = Clock::now();
+      if (s.step >= it->second.step) it->second = std::move(s);
+      if (!all_started_) {
+        bool all = true;
+        for (const auto& [_, st] : statuses_) all = all && st.utime != 0;
+        if (all) all_started_ = Clock::now();
+      }
+    } catch (const InputError&) {
+    }
+  }
+
+  bool all_done() const {
+    for (const auto& [_, s] : statuses_)
+      if (s.state != ModelState::kDone) return false;
+    return true;
+  }
+  std::optional<std::string> failure() const {
+    for (const auto& [name, s] : statuses_)
+      if (s.state == ModelState::kFailed) return s.error.empty() ? "model '" + name + "' failed" : s.error;
+    return std::nullopt;
+  }
+  double idle_seconds() const { return std::chrono::duration<double>(Clock::now() - last_progress_).count(); }
+  // Start-up (loading plugins, starting interpreters) gets more time than a step.
+  bool stalled(double timeout) const { return idle_seconds() > (all_started_ ? timeout : 3 * timeout + 10); }
+
+  std::string stall_report() const {
+    std::string r;
+    for (const auto& [name, s] : statuses_) {
+      if (s.state == ModelState::kDone) continue;
+      r += (r.empty() ? "" : "; ") + std::string("model '") + name + "' at step " + std::to_string(s.step);
+      if (!s.waiting.empty()) {
+        r += " waits for channel '" + s.waiting[0].first + "' step " + std::to_string(s.waiting[0].second);
+        for (const auto& m : sc_.models)
+          for (const auto& p : m.publish)
+            if (p.channel == s.waiting[0].first) r += " (published by model '" + m.name + "')";
+      }
+      else if (s.utime == 0)
+        r += " never reported (did it start?)";
+      else if (s.state == ModelState::kRunning)
+        r += " (running; its last report)";
+    }
+    return r;
+  }
+
+  void show(bool final) {
+    if (!isatty(2)) return;
+    std::string line;
+    for (const auto& [name, s] : statuses_)
+      line += " " + name + " " + std::to_string(s.step) + "/" + std::to_string(s.steps) + " " + state_name(s.state);
+    std::fprintf(stderr, "\r\033[Kcouple:%s%s", line.c_str(), final ? "\n" : "");
+  }
+
+  const std::map<std::string, ModelStatus>& statuses() const { return statuses_; }
+  int64_t events() const { return log_ ? log_->events() : 0; }
+  void flush() {
+    if (log_) log_->flush();
+  }
+
+ private:
+  struct Recorded {
+    LcmCodec codec;
+    std::set<int64_t> steps;  // logged beyond `next`
+    int64_t next;             // first step not yet logged
+    int64_t total;
+    std::string producer;
+  };
+  const ScenarioConfig& sc_;
+  std::unique_ptr<LcmLogWriter> log_;
+  std::map<std::string, Recorded> recorded_;
+  Clock::time_point last_report_{};
+  std::map<std::string, ModelStatus> statuses_;
+  Clock::time_point last_progress_;
+
+ public:
+  std::optional<Clock::time_point> all_started_;  // every model has reported once
+};
+
+LaunchResult finish(const ScenarioConfig& sc, Monitor& mon, Clock::time_point start) {
+  LaunchResult r;
+  const auto end = Clock::now();
+  r.seconds = std::chrono::duration<double>(end - start).count();
+  r.run_seconds = std::chrono::duration<double>(end - mon.all_started_.value_or(start)).count();
+  for (const auto& m : sc.models) {
+    r.steps = std::max(r.steps, m.steps());
+    r.model_steps[m.name] = mon.statuses().at(m.name).step;
+  }
+  r.steps_per_second = r.run_seconds > 0 ? static_cast<double>(r.steps) / r.run_seconds : 0;
+  mon.flush();
+  r.logged_events = mon.events();
+  return r;
+}
+
+LaunchResult launch_threads(const ScenarioConfig& sc, const LaunchOptions& opt) {
+  auto tr = make_transport(sc.transport);
+  Monitor mon(sc, *tr, opt.record);
+  std::atomic<bool> stop{false};
+  std::mutex m;
+  std::string first_error;
+  std::vector<std::unique_ptr<Transport>> transports;
+  std::vector<std::unique_ptr<MessageWrapper>> wrappers;
+  // Load every model before any starts, so a bad plugin fails before traffic.
+  for (const auto& cfg : sc.models) {
+    transports.push_back(make_transport(sc.transport));
+    WrapperOptions wo;
+    wo.stop = &stop;
+    wo.linger_seconds = sc.timeout_seconds;
+    wo.recorder = !opt.record.empty();
+    wrappers.push_back(std::make_unique<MessageWrapper>(sc, cfg.name, *transports.back(),
+                                                        load_model_function(cfg, sc.types), wo));
+  }
+  const auto start = Clock::now();
+  std::vector<std::thread> threads;
+  std::atomic<int> running{static_cast<int>(wrappers.size())};
+  for (auto& w : wrappers) {
+    threads.emplace_back([&, wp = w.get()] {
+      try {
+        wp->run();
+      } catch (const std::exception& e) {
+        std::lock_guard lock(m);
+        if (first_error.empty()) first_error = e.what();
+        stop = true;
+      }
+      --running;
+    });
+  }
+  std::string failure;
+  while (running > 0) {
+    tr->handle(20);
+    mon.report_recorder(*tr);
+    mon.show(false);
+    if (stop_flag()) failure = "interrupted";
+    else if (mon.stalled(sc.timeout_seconds))
+      failure = "no model advanced for " + std::to_string(sc.timeout_seconds) + " s: " + mon.stall_report();
+    if (!failure.empty()) {
+      stop = true;
+      break;
+    }
+  }
+  for (auto& t : threads) t.join();
+  while (tr->handle(0) > 0) {
+  }
+  mon.show(true);
+  {
+    std::lock_guard lock(m);
+    if (failure.empty() && !first_error.empty()) failure = first_error;
+  }
+  LaunchResult r = finish(sc, mon, start);
+  if (!failure.empty())
+    throw Failure(failure + (opt.record.empty() ? "" : " (log kept: " + opt.record.string() + ")"));
+  return r;
+}
+
+std::string describe_exit(int status) {
+  if (WIFEXITED(status)) return "exited with code " + std::to_string(WEXITSTATUS(status));
+  if (WIFSIGNALED(status)) return std::string("was killed by signal ") + strsignal(WTERMSIG(status));
+  return "stopped";
+}
+
+LaunchResult launch_processes(const ScenarioConfig& sc, const LaunchOptions& opt) {
+  auto tr = make_transport(sc.transport);
+  Monitor mon(sc, *tr, opt.record);
+  std::filesystem::path exe = opt.executable.empty() ? std::filesystem::read_symlink("/proc/self/exe") : opt.executable;
+  const std::string scenario = std::filesystem::absolute(opt.scenario_file.empty() ? sc.file : opt.scenario_file);
+  std::map<pid_t, std::string> children;
+  const auto start = Clock::now();
+  for (const auto& m : sc.models) {
+    const pid_t pid = fork();
+    if (pid < 0) throw Failure("fork failed");
+    if (pid == 0) {
+      execl(exe.c_str(), exe.c_str(), "couple", "run-model", scenario.c_str(), "--model", m.name.c_str(),
+            "--transport", sc.transport.c_str(), opt.record.empty() ? nullptr : "--recorder",
+            static_cast<char*>(nullptr));
+      std::fprintf(stderr, "cannot run %s: %s\n", exe.c_str(), std::strerror(errno));
+      _exit(127);
+    }
+    children[pid] = m.name;
+  }
+  std::string failure;
+  std::map<std::string, int> exit_status;
+  auto reap = [&](bool block) {
+    int status = 0;
+    pid_t pid;
+    while ((pid = waitpid(-1, &status, block ? 0 : WNOHANG)) > 0) {
+      auto it = children.find(pid);
+      if (it == children.end()) continue;
+      exit_status[it->second] = status;
+      if (failure.empty() && !(WIFEXITED(status) && WEXITSTATUS(status) == 0) && !stop_flag()) {
+        tr->handle(0);  // pick up its last status (the model's own error message)
+        auto why = mon.failure();
+        failure = why ? *why : "model '" + it->second + "' " + describe_exit(status) + " at step " +
+                                   std::to_string(mon.statuses().at(it->second).step);
+      }
+      children.erase(it);
+      if (children.empty()) break;
+    }
+  };
+  while (!children.empty()) {
+    tr->handle(20);
+    mon.report_recorder(*tr);
+    mon.show(false);
+    reap(false);
+    if (!failure.empty()) break;
+    if (auto why = mon.failure()) {
+      failure = *why;
+      break;
+    }
+    if (stop_flag()) {
+      failure = "interrupted";
+      break;
+    }
+    if (mon.stalled(sc.timeout_seconds)) {
+      failure = "no model advanced for " + std::to_string(static_cast<int>(sc.timeout_seconds)) + " s: " + mon.stall_report();
+      break;
+    }
+  }
+  if (!children.empty()) {
+    for (const auto& [pid, _] : children) kill(pid, SIGTERM);
+    const auto deadline = Clock::now() + std::chrono::seconds(3);
+    while (!children.empty() && Clock::now() < deadline) {
+      tr->handle(20);
+      reap(false);
+    }
+    for (const auto& [pid, _] : children) kill(pid, SIGKILL);
+    if (!children.empty()) reap(true);
+  }
+  while (tr->handle(0) > 0) {
+  }
+  mon.show(true);
+  LaunchResult r = finish(sc, mon, start);
+  if (!failure.empty())
+    throw Failure(failure + "; the other models were stopped" +
+                  (opt.record.empty() ? "" : " (log kept: " + opt.record.string() + ")"));
+  return r;
+}
+
+}  // namespace
+
+std::atomic<bool>& stop_flag() {
+  static std::atomic<bool> flag{false};
+  return flag;
+}
+
+void install_stop_signals() {
+  struct sigaction sa {};
+  sa.sa_handler = on_signal;
+  sigemptyset(&sa.sa_mask);
+  sa.sa_flags = 0;  // no SA_RESTART: blocking waits return so the flag is seen
+  sigaction(SIGINT, &sa, nullptr);
+  sigaction(SIGTERM, &sa, nullptr);
+}
+
+nlohmann::json LaunchResult::to_json() const {
+  return {{"models", model_steps}, {"steps", steps}, {"seconds", seconds}, {"run_seconds", run_seconds},
+          {"steps_per_second", steps_per_second},
+          {"logged_events", logged_events}};
+}
+
+LaunchResult launch(const ScenarioConfig& sc, const LaunchOptions& opt) {
+  install_stop_signals();
+  return is_in_process(sc.transport) ? launch_threads(sc, opt) : launch_processes(sc, opt);
+}
+
+int run_model_process(const std::filesystem::path& scenario_file, const std::string& model,
+                      const std::string& transport, bool recorder) {
+  install_stop_signals();
+  const ScenarioConfig sc = load_scenario(scenario_file);
+  const ModelConfig& cfg = sc.model(model);
+  const std::string url = !transport.empty() ? transport : cfg.transport.empty() ? sc.transport : cfg.transport;
+  auto tr = make_transport(url);
+  WrapperOptions wo;
+  wo.stop = &stop_flag();
+  wo.linger_seconds = sc.timeout_seconds;
+  wo.recorder = recorder;
+  MessageWrapper w(sc, model, *tr, load_model_function(cfg, sc.types), wo);
+  w.run();
+  return w.stopped() ? 130 : 0;
+}
+
+}  // namespace builtscene::couple

@@ -1,0 +1,48 @@
+#pragma once
+// Runs a scenario: every model in its own process (udpm://) or thread (memq://), one
+// wrapper each, while the launcher records every channel to an LCM log, shows each
+// model's step, stops everything cleanly on Ctrl-C, and fails with a clear message when a
+// model fails or exits, or when no model advances within the scenario's timeout (naming
+// the model, the channel and the step it waits for). The log is kept in every case.
+#include <atomic>
+#include <filesystem>
+#include <map>
+#include <optional>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "couple/model_config.hpp"
+
+namespace builtscene::couple {
+
+struct LaunchOptions {
+  std::filesystem::path record;      // empty: no log
+  std::filesystem::path executable;  // the builtscene binary (default /proc/self/exe)
+  std::filesystem::path scenario_file;  // passed to model processes
+  bool show_progress = true;
+};
+
+struct LaunchResult {
+  int64_t steps = 0;  // the longest model's steps
+  double seconds = 0;      // wall time, model start-up included
+  double run_seconds = 0;  // from the moment every model reported to the end
+  double steps_per_second = 0;  // steps / run_seconds
+  int64_t logged_events = 0;
+  std::map<std::string, int64_t> model_steps;
+  nlohmann::json to_json() const;
+};
+
+// Throws Failure (a model failed, exited, stalled, or the user interrupted) after
+// stopping the other models and closing the log.
+LaunchResult launch(const ScenarioConfig& scenario, const LaunchOptions& options);
+
+// The body of one model process (`builtscene couple run-model`): returns the exit code.
+// `transport` overrides the scenario's (the launcher passes its own).
+int run_model_process(const std::filesystem::path& scenario_file, const std::string& model,
+                      const std::string& transport = "", bool recorder = false);
+
+// SIGINT/SIGTERM set this; wrappers and the launcher poll it.
+std::atomic<bool>& stop_flag();
+void install_stop_signals();
+
+}  // namespace builtscene::couple

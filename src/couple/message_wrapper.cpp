@@ -1,0 +1,304 @@
+#include "couple/message_wrapper.hpp"
+
+#include <chrono>
+#include <limits>
+#include <map>
+#include <optional>
+
+#include "core/errors.hpp"
+#include "core/logging.hpp"
+#include "couple/lcm_codec.hpp"
+
+namespace builtscene::couple {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+using nlohmann::json;
+
+int64_t now_us() {
+  return std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::system_clock::now().time_since_epoch())
+      .count();
+}
+
+json merged(const LcmCodec& codec, const json& values, int64_t step) {
+  json v = codec.zero();
+  for (const auto& [k, val] : values.items()) v[k] = val;
+  v[kStepField] = step;
+  return v;
+}
+
+}  // namespace
+
+struct MessageWrapper::Impl {
+  struct Input {
+    const Subscription* sub;
+    LcmCodec codec;
+    std::map<int64_t, Bytes> buffer;  // producer step -> message
+    std::optional<Bytes> initial;     // the subscription's own values for steps < 0
+    bool producer_initial = false;    // the producer publishes step -1 at start
+    bool self = false;                // our own output channel
+  };
+  struct Consumer {
+    std::string model;
+    const ModelConfig* config;
+    const Subscription* sub;
+    int64_t need;  // oldest of our steps it still needs
+    bool done = false;
+  };
+  struct Output {
+    const Publication* pub;
+    LcmCodec codec;
+    std::map<int64_t, Bytes> retained;
+    std::vector<Consumer> consumers;  // other models reading this channel
+    int64_t last = std::numeric_limits<int64_t>::min();
+    Clock::time_point last_republish{};
+  };
+
+  const ScenarioConfig& sc;
+  const ModelConfig& cfg;
+  Transport& tr;
+  std::unique_ptr<ModelFunction> fn;
+  WrapperOptions opt;
+  std::vector<Input> inputs;
+  std::vector<Output> outputs;
+  int64_t n = 0;
+  int64_t total = 0;
+  bool was_stopped = false;
+  std::vector<std::vector<const Bytes*>> args;
+  std::vector<Bytes> results;
+  ModelStatus status;
+  Clock::time_point last_status{};
+  std::string self_channel_note;
+
+  Impl(const ScenarioConfig& s, const std::string& model, Transport& t, std::unique_ptr<ModelFunction> f,
+       WrapperOptions o)
+      : sc(s), cfg(s.model(model)), tr(t), fn(std::move(f)), opt(std::move(o)) {
+    total = cfg.steps();
+    status.model = cfg.name;
+    status.steps = total;
+    for (const auto& p : cfg.publish) {
+      Output out{&p, LcmCodec(sc.types, p.type), {}, {}, {}, {}};
+      for (const auto& m : sc.models) {
+        if (m.name == cfg.name) continue;
+        for (const auto& sub : m.subscribe)
+          if (sub.channel == p.channel)
+            out.consumers.push_back({m.name, &m, &sub, sub.expected_step(0) - (sub.history - 1)});
+      }
+      if (opt.recorder) out.consumers.push_back({kRecorderName, nullptr, nullptr, p.initial ? -1 : 0});
+      outputs.push_back(std::move(out));
+    }
+    for (const auto& sub : cfg.subscribe) {
+      Input in{&sub, LcmCodec(sc.types, sub.type), {}, {}, false, false};
+      if (sub.initial) in.initial = in.codec.encode(merged(in.codec, *sub.initial, -1));
+      for (const auto& m : sc.models)
+        for (const auto& p : m.publish)
+          if (p.channel == sub.channel) {
+            in.producer_initial = p.initial.has_value();
+            in.self = m.name == cfg.name;
+          }
+      inputs.push_back(std::move(in));
+    }
+    for (std::size_t i = 0; i < inputs.size(); ++i) {
+      if (inputs[i].self) continue;  // our own outputs go straight into the buffer
+      tr.subscribe(inputs[i].sub->channel, [this, i](const std::string&, const uint8_t* d, std::size_t size) {
+        on_input(i, d, size);
+      });
+    }
+    tr.subscribe(kStatusChannel, [this](const std::string&, const uint8_t* d, std::size_t size) { on_status(d, size); });
+    args.resize(inputs.size());
+    results.resize(outputs.size());
+  }
+
+  void on_input(std::size_t i, const uint8_t* d, std::size_t size) {
+    auto& in = inputs[i];
+    int64_t step;
+    try {
+      step = in.codec.read_int64(d, size, kStepField);
+    } catch (const InputError& e) {
+      spdlog::warn("{}: dropped a message on '{}': {}", cfg.name, in.sub->channel, e.what());
+      return;
+    }
+    if (step < oldest_needed(in, n)) return;  // a late duplicate
+    in.buffer.try_emplace(step, d, d + size);
+  }
+
+  void on_status(const uint8_t* d, std::size_t size) {
+    ModelStatus s;
+    try {
+      s = decode_status(sc.types, d, size);
+    } catch (const InputError&) {
+      return;
+    }
+    for (auto& out : outputs) {
+      for (auto& c : out.consumers) {
+        if (c.model != s.model) continue;
+        if (s.state == ModelState::kDone) c.done = true;
+        for (const auto& [ch, step] : s.needs)
+          if (ch == out.pub->channel) c.need = std::max(c.need, step);
+        for (const auto& [ch, step] : s.waiting)
+          if (ch == out.pub->channel && step <= out.last) republish(out, step);
+      }
+    }
+  }
+
+  void republish(Output& out, int64_t from) {
+    const auto now = Clock::now();
+    if (now - out.last_republish < std::chrono::milliseconds(opt.republish_ms)) return;
+    out.last_republish = now;
+    spdlog::debug("{}: re-sending {} from step {}", cfg.name, out.pub->channel, from);
+    int count = 0;
+    for (auto it = out.retained.lower_bound(from); it != out.retained.end() && count < opt.window; ++it, ++count)
+      tr.publish(out.pub->channel, it->second.data(), it->second.size());
+  }
+
+  int64_t oldest_needed(const Input& in, int64_t step) const {
+    return in.sub->expected_step(step) - (in.sub->history - 1);
+  }
+
+  // Collects the inputs of step n; on a missing one names it.
+  bool gather(std::pair<std::string, int64_t>* missing) {
+    for (std::size_t i = 0; i < inputs.size(); ++i) {
+      auto& in = inputs[i];
+      args[i].clear();
+      const int64_t newest = in.sub->expected_step(n);
+      for (int k = 0; k < in.sub->history; ++k) {
+        const int64_t s = newest - k;
+        auto it = in.buffer.find(s);
+        if (it != in.buffer.end()) {
+          args[i].push_back(&it->second);
+        } else if (s < 0 && in.initial && !(s == -1 && in.producer_initial)) {
+          args[i].push_back(&*in.initial);
+        } else {
+          if (missing) *missing = {in.sub->channel, s};
+          return false;
+        }
+      }
+    }
+    return true;
+  }
+
+  bool flow_ok(std::pair<std::string, int64_t>* blocked) {
+    for (auto& out : outputs)
+      for (auto& c : out.consumers)
+        if (!c.done && n - c.need >= opt.window) {
+          if (blocked) *blocked = {"(flow control: " + c.model + " needs " + out.pub->channel + ")", c.need};
+          return false;
+        }
+    return true;
+  }
+
+  void publish_output(Output& out, int64_t step, Bytes bytes) {
+    tr.publish(out.pub->channel, bytes.data(), bytes.size());
+    out.last = step;
+    for (auto& in : inputs)
+      if (in.self && in.sub->channel == out.pub->channel) in.buffer.emplace(step, bytes);
+    if (!out.consumers.empty()) out.retained.emplace(step, std::move(bytes));
+  }
+
+  void trim() {
+    for (auto& in : inputs) {
+      const int64_t keep = oldest_needed(in, n);
+      in.buffer.erase(in.buffer.begin(), in.buffer.lower_bound(keep));
+    }
+    for (auto& out : outputs) {
+      int64_t keep = std::numeric_limits<int64_t>::max();
+      for (const auto& c : out.consumers)
+        if (!c.done) keep = std::min(keep, c.need);
+      out.retained.erase(out.retained.begin(), out.retained.lower_bound(keep));
+    }
+  }
+
+  void send_status(ModelState state, const std::pair<std::string, int64_t>* waiting, const std::string& error = "") {
+    status.step = n;
+    status.utime = now_us();
+    status.state = state;
+    status.waiting.clear();
+    if (waiting) status.waiting.push_back(*waiting);
+    status.needs.clear();
+    for (const auto& in : inputs)
+      status.needs.emplace_back(in.sub->channel, n >= total ? std::numeric_limits<int64_t>::max() : oldest_needed(in, n));
+    status.error = error;
+    const auto bytes = encode_status(sc.types, status);
+    tr.publish(kStatusChannel, bytes.data(), bytes.size());
+    last_status = Clock::now();
+  }
+
+  bool consumers_done() const {
+    for (const auto& out : outputs)
+      for (const auto& c : out.consumers)
+        if (!c.done && c.need <= out.last) return false;
+    return true;
+  }
+
+  bool stop_requested() const { return opt.stop && opt.stop->load(); }
+
+  void run() {
+    for (auto& out : outputs)
+      if (out.pub->initial) publish_output(out, -1, out.codec.encode(merged(out.codec, *out.pub->initial, -1)));
+    send_status(ModelState::kRunning, nullptr);
+    std::pair<std::string, int64_t> wait;
+    Clock::time_point finished{};
+    while (!stop_requested()) {
+      tr.handle(0);
+      if (n < total) {
+        if (gather(&wait) && flow_ok(&wait)) {
+          compute();
+          continue;
+        }
+      } else {
+        if (finished == Clock::time_point{}) {
+          finished = Clock::now();
+          send_status(ModelState::kDone, nullptr);
+        }
+        if (consumers_done()) return;
+        if (Clock::now() - finished > std::chrono::duration<double>(opt.linger_seconds)) {
+          spdlog::warn("{}: finished, but not every consumer confirmed it got the last steps", cfg.name);
+          return;
+        }
+      }
+      tr.handle(20);
+      // Report at most every 20 ms while blocked: consumers learn what to re-send, the
+      // launcher what everyone waits for.
+      if (Clock::now() - last_status > std::chrono::milliseconds(20)) {
+        if (n < total)
+          send_status(ModelState::kWaiting, &wait);
+        else
+          send_status(ModelState::kDone, nullptr);
+      }
+    }
+    was_stopped = true;
+    send_status(ModelState::kStopped, nullptr);
+  }
+
+  void compute() {
+    // A model stuck in its function still shows which step it is computing.
+    if (Clock::now() - last_status > std::chrono::milliseconds(100)) send_status(ModelState::kRunning, nullptr);
+    try {
+      fn->step(n, static_cast<double>(n) * cfg.dt, args, results);
+      for (std::size_t i = 0; i < outputs.size(); ++i) {
+        const int64_t stamped = outputs[i].codec.read_int64(results[i].data(), results[i].size(), kStepField);
+        if (stamped != n)
+          throw Failure("model '" + cfg.name + "' stamped step " + std::to_string(stamped) + " on channel '" +
+                        outputs[i].pub->channel + "' at step " + std::to_string(n));
+      }
+    } catch (const std::exception& e) {
+      send_status(ModelState::kFailed, nullptr, e.what());
+      throw Failure(e.what());
+    }
+    for (std::size_t i = 0; i < outputs.size(); ++i) publish_output(outputs[i], n, std::move(results[i]));
+    if (opt.on_step) opt.on_step(n);
+    ++n;
+    trim();
+    if (n % opt.status_every == 0) send_status(ModelState::kRunning, nullptr);
+  }
+};
+
+MessageWrapper::MessageWrapper(const ScenarioConfig& scenario, const std::string& model, Transport& transport,
+                               std::unique_ptr<ModelFunction> function, WrapperOptions options)
+    : impl_(std::make_unique<Impl>(scenario, model, transport, std::move(function), std::move(options))) {}
+MessageWrapper::~MessageWrapper() = default;
+void MessageWrapper::run() { impl_->run(); }
+bool MessageWrapper::stopped() const { return impl_->was_stopped; }
+int64_t MessageWrapper::steps_done() const { return impl_->n; }
+
+}  // namespace builtscene::couple

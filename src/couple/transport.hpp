@@ -1,0 +1,33 @@
+#pragma once
+// Message transports. Model code and the wrapper never change between them:
+//   udpm://GROUP:PORT?ttl=0   LCM UDP multicast (processes, hosts on a LAN)
+//   memq://NAME               an in-process bus shared by every endpoint with the same
+//                             NAME (models as threads of one process; tests)
+// A later mediator transport (issue 11) implements the same interface.
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <string>
+
+namespace builtscene::couple {
+
+class Transport {
+ public:
+  using Handler = std::function<void(const std::string& channel, const uint8_t* data, std::size_t size)>;
+  virtual ~Transport() = default;
+  // Exact channel name; "" subscribes to every channel (recorders, spy).
+  virtual void subscribe(const std::string& channel, Handler handler) = 0;
+  virtual void publish(const std::string& channel, const uint8_t* data, std::size_t size) = 0;
+  // Delivers pending messages to the handlers; waits at most timeout_ms for the first one.
+  // Returns the number delivered (0 on timeout or interruption).
+  virtual int handle(int timeout_ms) = 0;
+  virtual std::string url() const = 0;
+};
+
+// Throws InputError for an unknown scheme, Failure when the transport cannot start
+// (for udpm, with the multicast-route fix in the message).
+std::unique_ptr<Transport> make_transport(const std::string& url);
+
+bool is_in_process(const std::string& url);  // memq://
+
+}  // namespace builtscene::couple
