@@ -8,6 +8,7 @@
 
 #include <opencv2/imgcodecs.hpp>
 
+#include "core/errors.hpp"
 #include "core/logging.hpp"
 #include "demo_registry.hpp"
 #include "eval/marker_evaluation.hpp"
@@ -46,14 +47,25 @@ DemoSection run_ogm_demo(const std::filesystem::path& dir) {
   // A path from the robot's start to the far corner of the room's free space.
   const Costmap costmap(grid, {});
   const AStarPlanner planner(costmap);
-  const Eigen::Vector2d start(r.poses.front().x, r.poses.front().y);
+  // Start from the first pose of the drive whose cell the costmap lets the robot stand on
+  // (the very first cells may still be unknown: the camera looks ahead, not down).
+  Eigen::Vector2d start(r.poses.front().x, r.poses.front().y);
+  for (const auto& p : r.poses)
+    if (costmap.traversable(grid.cell_of({p.x, p.y}), false)) {
+      start = {p.x, p.y};
+      break;
+    }
   PlanResult plan;
   Eigen::Vector2d goal = start;
   for (int row = grid.height() - 1; row >= 0 && !plan.found; --row)
     for (int col = grid.width() - 1; col >= 0 && !plan.found; col -= 7)
       if (costmap.traversable({col, row}, false) && (grid.center_of({col, row}) - start).norm() > 3.0) {
         goal = grid.center_of({col, row});
-        plan = planner.plan(start, goal);
+        try {
+          plan = planner.plan(start, goal);
+        } catch (const InputError&) {
+          break;  // no traversable start: report "none found"
+        }
       }
   MapDrawing d(grid, 3);
   d.trajectory(r.poses);
