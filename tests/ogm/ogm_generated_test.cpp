@@ -2,6 +2,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <unistd.h>
+
 #include <fstream>
 
 #include <nlohmann/json.hpp>
@@ -18,7 +20,8 @@ using testing::shell_quote;
 
 const fs::path& lab_room() {
   static const fs::path dir = [] {
-    const auto d = fs::temp_directory_path() / "bs_ogm_lab_room";
+    // One folder per process: ctest runs tests in parallel processes.
+    const auto d = fs::temp_directory_path() / ("bs_ogm_lab_room_" + std::to_string(::getpid()));
     fs::remove_all(d);
     const auto r = run_cli("synth rgbd --scene lab-room --motion robot --frames 450 --seed 3 --out " + shell_quote(d));
     EXPECT_EQ(r.exit_code, 0) << r.err;
@@ -34,8 +37,8 @@ nlohmann::json build(const fs::path& out, const std::string& extra) {
   return r.exit_code == 0 ? nlohmann::json::parse(r.out) : nlohmann::json();
 }
 
-TEST(OgmGenerated, LabRoomFromGroundTruthMatchesTheTrueMap) {
-  const auto j = build(fs::temp_directory_path() / "bs_ogm_lab_map", "--truth " + shell_quote(lab_room() / "truth_map.yaml"));
+ void check_map_scores() {
+  const auto j = build(fs::temp_directory_path() / ("bs_ogm_lab_map_" + std::to_string(::getpid())), "--truth " + shell_quote(lab_room() / "truth_map.yaml"));
   ASSERT_TRUE(j.contains("score"));
   EXPECT_GE(j["score"]["occupied_precision"].get<double>(), 0.90);
   EXPECT_GE(j["score"]["occupied_recall"].get<double>(), 0.85);
@@ -52,9 +55,9 @@ bool in_footprint(const nlohmann::json& box, const Eigen::Vector2d& p, double ma
   return std::abs(u) <= box["size"][0].get<double>() / 2 - margin && std::abs(v) <= box["size"][1].get<double>() / 2 - margin;
 }
 
-TEST(OgmGenerated, HeightBandSeesDeskTopsThatOneHeightMisses) {
-  const auto band = fs::temp_directory_path() / "bs_ogm_lab_band";
-  const auto one = fs::temp_directory_path() / "bs_ogm_lab_one_height";
+void check_desk_tops() {
+  const auto band = fs::temp_directory_path() / ("bs_ogm_lab_band_" + std::to_string(::getpid()));
+  const auto one = fs::temp_directory_path() / ("bs_ogm_lab_one_height_" + std::to_string(::getpid()));
   build(band, "--world zup");
   build(one, "--world zup --min-height 0.29 --max-height 0.31");  // a 2D lidar at 0.30 m
   const OccupancyGrid a = load_map_server(fs::path(band.string() + ".yaml"));
@@ -83,6 +86,13 @@ TEST(OgmGenerated, HeightBandSeesDeskTopsThatOneHeightMisses) {
   ASSERT_GT(cells, 100);
   EXPECT_GE(band_hits, 20) << "of " << cells << " cells under desk tops";
   EXPECT_LE(one_hits, 2) << "of " << cells << " cells under desk tops";
+}
+
+// One test: both checks share one generated lab room (generating it takes most of the time).
+TEST(OgmGenerated, LabRoomMapMatchesTheTrueMapAndSeesDeskTopsThatOneHeightMisses) {
+  check_map_scores();
+  check_desk_tops();
+  fs::remove_all(lab_room());
 }
 
 }  // namespace
