@@ -278,7 +278,7 @@ const bool spy_cmd = register_command({
               auto s = decode_status(types, d, n);
               models[s.model] = s;
             } else if (types.get(it->second).member(kStepField)) {
-              c.last_step = LcmCodec(types, it->second).read_int64(d, n, kStepField);
+              c.last_step = std::max(c.last_step, LcmCodec(types, it->second).read_int64(d, n, kStepField));
             }
           } catch (const InputError&) {
           }

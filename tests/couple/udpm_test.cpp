@@ -201,3 +201,17 @@ TEST(Udpm, CtrlCStopsEveryModelCleanlyAndKeepsTheLog) {
   EXPECT_GT(log["X"].size() + log["Y"].size() + log["Z"].size(), 0u);
   EXPECT_EQ(left_over(d), "");
 }
+
+TEST(Udpm, SpyShowsTheLiveChannelsAndSteps) {
+  const auto dir = couple_test::temp_dir("spy");
+  const std::string scenario = couple_test::kExample + "/scenario.yaml";
+  UDPM_OR_SKIP(r, kBin + " couple spy --scenario " + scenario + " --duration 4 --json > " + (dir / "spy.json").string() +
+                      " & S=$!\nsleep 0.5\n" + kBin + " couple launch " + scenario + " > /dev/null\nwait $S\n");
+  ASSERT_EQ(r->code, 0) << r->out;
+  const json spy = json::parse(std::ifstream(dir / "spy.json"));
+  for (const std::string ch : {"WIND", "STRUCTURE", "CONTROL"}) {
+    EXPECT_GE(spy["channels"][ch]["messages"].get<int>(), 6000) << spy.dump();
+    EXPECT_EQ(spy["channels"][ch]["last_step"], 5999) << spy.dump();
+  }
+  EXPECT_EQ(spy["channels"]["STRUCTURE"]["type"], "wsc.response_t");
+}
