@@ -284,6 +284,8 @@ const bool spy_cmd = register_command({
           }
         });
         install_stop_signals();
+        // Scripts wait for this line before they start the models they want to watch.
+        spdlog::info("couple spy: listening on {}", o->url);
         const auto start = std::chrono::steady_clock::now();
         auto last_print = start;
         std::map<std::string, int64_t> prev;
