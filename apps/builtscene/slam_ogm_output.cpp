@@ -83,6 +83,7 @@ nlohmann::json SlamOgmOutput::finish(slam::System& system) {
   const std::filesystem::path state = options_.out.string() + ".state";
   const std::filesystem::path png = options_.out.string() + ".png";
   save_map_server(grid, yaml);
+  append_ground_frame(yaml, emitter_->ground().T_gw());  // so `localize --ogm` can put poses on it
   mapper_.save_state(state);
   MapDrawing d(grid, 2);
   d.trajectory(keyframe_poses_);
