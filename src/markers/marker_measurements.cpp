@@ -71,14 +71,24 @@ MarkerTruth parse_truth(const std::vector<std::string>& c, const std::filesystem
 
 }  // namespace
 
+MarkerMeasurementWriter::MarkerMeasurementWriter(const std::filesystem::path& path) : path_(path), out_(path) {
+  out_ << "frame,time,id,x,y,z,distance,angle_deg\n" << std::fixed;
+  out_.flush();
+  if (!out_) throw InputError(located(path, 0, "cannot write marker measurements"));
+}
+
+void MarkerMeasurementWriter::write(const MarkerMeasurement& m) {
+  out_ << m.frame << ',' << std::setprecision(6) << m.time << ',' << m.id << ',' << std::setprecision(5)
+       << m.position.x() << ',' << m.position.y() << ',' << m.position.z() << ',' << m.distance << ','
+       << std::setprecision(2) << m.angle_deg << '\n';
+  out_.flush();  // a run stopped later keeps every measurement made so far
+  if (!out_) throw Failure(located(path_, 0, "cannot write marker measurements"));
+  ++rows_;
+}
+
 void write_marker_measurements(const std::filesystem::path& path, const std::vector<MarkerMeasurement>& ms) {
-  std::ofstream out(path);
-  out << "frame,time,id,x,y,z,distance,angle_deg\n" << std::fixed;
-  for (const auto& m : ms)
-    out << m.frame << ',' << std::setprecision(6) << m.time << ',' << m.id << ',' << std::setprecision(5)
-        << m.position.x() << ',' << m.position.y() << ',' << m.position.z() << ',' << m.distance << ','
-        << std::setprecision(2) << m.angle_deg << '\n';
-  if (!out) throw Failure(located(path, 0, "cannot write marker measurements"));
+  MarkerMeasurementWriter w(path);
+  for (const auto& m : ms) w.write(m);
 }
 
 std::vector<MarkerMeasurement> read_marker_measurements(const std::filesystem::path& path) {

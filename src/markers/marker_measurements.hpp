@@ -4,6 +4,7 @@
 // from. CSV columns: frame,time,id,x,y,z,distance,angle_deg. Surveyed markers ("truth") use
 // the generated worlds' markers.csv columns: id,x,y,z,yaw,size.
 #include <filesystem>
+#include <fstream>
 #include <map>
 #include <vector>
 
@@ -28,6 +29,20 @@ struct MarkerTruth {
 };
 
 void write_marker_measurements(const std::filesystem::path& path, const std::vector<MarkerMeasurement>& m);
+
+// Writes measurements as they are made (header first, a flushed row each), so a long
+// localization run that stops keeps what it measured. InputError if the file cannot be opened.
+class MarkerMeasurementWriter {
+ public:
+  explicit MarkerMeasurementWriter(const std::filesystem::path& path);
+  void write(const MarkerMeasurement& m);
+  std::size_t rows() const { return rows_; }
+
+ private:
+  std::filesystem::path path_;
+  std::ofstream out_;
+  std::size_t rows_ = 0;
+};
 std::vector<MarkerMeasurement> read_marker_measurements(const std::filesystem::path& path);
 std::vector<MarkerTruth> read_marker_truth(const std::filesystem::path& path);
 
