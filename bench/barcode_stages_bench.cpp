@@ -60,8 +60,8 @@ BENCHMARK(BM_WholeFrameDecoder)->Unit(benchmark::kMillisecond);
 void BM_PipelineFrame(benchmark::State& s) {
   barcode::StageSettings st;
   st.region.threshold = 0.6;
-  const barcode::ZXingDecoder whole(true), crop(false);
-  const barcode::DecoderSet ds{whole, crop};
+  const barcode::ZXingDecoder whole(true), crop(false), upright(false, 3);
+  const barcode::DecoderSet ds{whole, crop, upright};
   for (auto _ : s) benchmark::DoNotOptimize(barcode::read_frame(frame(), st, ds, true, false, true, 32));
 }
 BENCHMARK(BM_PipelineFrame)->Unit(benchmark::kMillisecond);

@@ -44,12 +44,16 @@ class ZXingDecoder final : public Decoder {
  public:
   // thorough = false: no 90-degree retry and no downscaled pyramid, for small crops that the
   // pipeline has already cut out and turns upright itself.
-  explicit ZXingDecoder(bool thorough = true) : thorough_(thorough) {}
+  // min_lines: scan lines that must agree on a symbol (zxing's default is 2). Uprighted region
+  // patches use 3: resampled bars of a weak symbology (Code 39 has no check character) can
+  // otherwise give one-off misreads, e.g. "/650831" for P650831 on the generated 2000-frame scan.
+  explicit ZXingDecoder(bool thorough = true, int min_lines = 2) : thorough_(thorough), min_lines_(min_lines) {}
   std::vector<DecodedSymbol> decode(const cv::Mat& gray, int max_symbols) const override;
   std::string name() const override { return "zxing"; }
 
  private:
   bool thorough_;
+  int min_lines_;
 };
 
 class ZBarDecoder final : public Decoder {
@@ -61,7 +65,7 @@ class ZBarDecoder final : public Decoder {
 // zxing first; ZBar for whatever zxing did not read.
 class CombinedDecoder final : public Decoder {
  public:
-  explicit CombinedDecoder(bool thorough = true) : zxing_(thorough) {}
+  explicit CombinedDecoder(bool thorough = true, int min_lines = 2) : zxing_(thorough, min_lines) {}
   std::vector<DecodedSymbol> decode(const cv::Mat& gray, int max_symbols) const override;
   std::string name() const override { return "both"; }
 
@@ -70,8 +74,8 @@ class CombinedDecoder final : public Decoder {
   ZBarDecoder zbar_;
 };
 
-// thorough: see ZXingDecoder (ZBar has no such setting).
-std::unique_ptr<Decoder> make_decoder(DecoderKind kind, bool thorough = true);
+// thorough, min_lines: see ZXingDecoder (ZBar has no such settings).
+std::unique_ptr<Decoder> make_decoder(DecoderKind kind, bool thorough = true, int min_lines = 2);
 
 namespace detail {
 cv::Mat as_gray_continuous(const cv::Mat& image);

@@ -60,6 +60,7 @@ std::vector<DecodedSymbol> ZXingDecoder::decode(const cv::Mat& image, int max_sy
   hints.setTryHarder(true);
   hints.setTryRotate(thorough_);
   hints.setTryDownscale(thorough_);
+  hints.setMinLineCount(static_cast<uint8_t>(std::clamp(min_lines_, 1, 16)));
   // The one setting that keeps zxing-cpp 1.4 away from its multi-symbol assertion (see header).
   hints.setMaxNumberOfSymbols(1);
   bool painted = false;
