@@ -138,7 +138,7 @@ std::vector<FrameRead> read_frame(const cv::Mat& frame, const StageSettings& set
   const bool baseline = decoder_only || !settings.regions;
   if (baseline || whole_frame) {
     const double ts = thread_cpu_ms();
-    const Decoder& d = baseline ? decoders.whole : decoders.crop;
+    const Decoder& d = baseline ? decoders.whole : decoders.frame;
     for (auto& s : d.decode(gray, max_symbols)) reads.push_back({s, symbol_box(s, gray.size()), false});
     time("whole_frame", ts);
     if (baseline) return reads;
@@ -285,13 +285,13 @@ ScanResult scan(const fs::path& video, const ScanOptions& options) {
   StageSettings settings = parse_stage_settings(options);
   const bool use_keys = settings.keyframes && !options.decoder_only;
   const bool use_regions = settings.regions && !options.decoder_only;
-  // Whole frames get zxing's thorough search (90-degree retry, downscaled pyramid), in the
-  // pipeline as in the baseline, so the pipeline reads every key frame at least as well as the
-  // decoder alone; region crops get the quick search (the pipeline turns them upright itself).
-  const auto whole_decoder = make_decoder(options.decoder, true);
-  const auto crop_decoder = make_decoder(options.decoder, false);
-  const auto upright_decoder = make_decoder(options.decoder, false, 3);
-  const DecoderSet decoders{*whole_decoder, *crop_decoder, *upright_decoder};
+  // The decoder alone gets zxing's thorough search; the pipeline's whole-frame pass the same
+  // without the downscaled pyramid; region crops the quick search (see DecoderSet).
+  const auto whole_decoder = make_decoder(options.decoder, ZXingSearch::thorough);
+  const auto frame_decoder = make_decoder(options.decoder, ZXingSearch::rotated);
+  const auto crop_decoder = make_decoder(options.decoder, ZXingSearch::quick);
+  const auto upright_decoder = make_decoder(options.decoder, ZXingSearch::quick, 3);
+  const DecoderSet decoders{*whole_decoder, *frame_decoder, *crop_decoder, *upright_decoder};
   StageTimer timer;
   ScanResult result;
   const int threads = std::max(1, options.threads);

@@ -66,20 +66,21 @@ struct FrameRead {
   bool rotated = false;
 };
 
-// The decoders of a scan. `whole` is zxing-cpp's thorough search (its defaults: 90-degree retry,
-// downscaled pyramid), used by the decoder alone on whole frames. `crop` is the quick search
-// (every few rows, no retry), used by the pipeline on whole key frames and on region crops: the
-// pipeline turns rolled symbols upright itself, so the retries only cost time (on the generated
-// 2000-frame scan the quick search reads the same labels from whole frames at a third of the cost).
-// `upright` reads uprighted region patches (quick search, 3 agreeing scan lines).
+// The decoders of a scan. `whole`: zxing-cpp's thorough search (its defaults: 90-degree retry,
+// downscaled pyramid), the decoder alone on whole frames. `frame`: the pipeline's whole-key-frame
+// pass, rows and columns without the pyramid (on the generated 2000-frame scan the pyramid read
+// nothing more, at twice the cost; the columns keep symbols turned by 90 degrees, which region
+// detection often misses). `crop`: quick search of region crops. `upright`: quick search of
+// uprighted region patches with 3 agreeing scan lines.
 struct DecoderSet {
   const Decoder& whole;
+  const Decoder& frame;
   const Decoder& crop;
   const Decoder& upright;
 };
 
 // Reads one frame (no key-frame logic): the thorough decoder alone on the whole frame
-// (decoder_only or regions off); otherwise optionally the quick decoder on the whole frame first,
+// (decoder_only or regions off); otherwise optionally the `frame` decoder on the whole frame first,
 // then every region holding no symbol yet: as is (only when the whole frame was not read, since
 // that read the same pixels already), then turned upright by the estimated direction. Thread-safe.
 // `timer`, when given, receives per-stage times (whole_frame, regions, direction, upright_decode).
