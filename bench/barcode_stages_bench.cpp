@@ -61,9 +61,9 @@ void BM_PipelineFrame(benchmark::State& s) {
   barcode::StageSettings st;
   st.region.threshold = 0.6;
   using barcode::ZXingSearch;
-  const barcode::ZXingDecoder whole(ZXingSearch::thorough), frame(ZXingSearch::rotated), crop(ZXingSearch::quick),
+  const barcode::ZXingDecoder whole(ZXingSearch::thorough), on_frame(ZXingSearch::rotated), crop(ZXingSearch::quick),
       upright(ZXingSearch::quick, 3);
-  const barcode::DecoderSet ds{whole, frame, crop, upright};
+  const barcode::DecoderSet ds{whole, on_frame, crop, upright};
   for (auto _ : s) benchmark::DoNotOptimize(barcode::read_frame(frame(), st, ds, true, false, true, 32));
 }
 BENCHMARK(BM_PipelineFrame)->Unit(benchmark::kMillisecond);
