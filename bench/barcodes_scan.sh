@@ -6,7 +6,9 @@
 # their ratio, the CPU seconds (user + system) and what they imply on 2 idle cores, and the load
 # average around every run (the machine may be shared); writes bench-out/barcodes_scan.json.
 #   bench/barcodes_scan.sh [WORKDIR] [RUNS]      (defaults: /tmp/builtscene-bench-barcodes, 3)
-# Environment: FRAMES (2000), SIZE (1920x1080), SEED (1), THREADS (2).
+# Environment: FRAMES (2000), SIZE (1920x1080), SEED (1), THREADS (2), PIPELINE_ARGS (extra
+# options for the pipeline runs, e.g. "--keyframes 1.0"; the summary is then written to
+# bench-out/barcodes_scan_<args>.json).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 BIN=${BIN:-build/release/apps/builtscene/builtscene}
@@ -16,6 +18,9 @@ FRAMES=${FRAMES:-2000}
 SIZE=${SIZE:-1920x1080}
 SEED=${SEED:-1}
 THREADS=${THREADS:-2}
+PIPELINE_ARGS=${PIPELINE_ARGS:-}
+SUMMARY=bench-out/barcodes_scan.json
+[ -n "$PIPELINE_ARGS" ] && SUMMARY="bench-out/barcodes_scan_$(echo "$PIPELINE_ARGS" | tr -c 'A-Za-z0-9.\n' '_').json"
 SCAN="$WORK/scan-$FRAMES-$SIZE-$SEED"
 mkdir -p bench-out "$WORK"
 if [ ! -f "$SCAN/truth.csv" ]; then
@@ -26,12 +31,12 @@ results=()
 for run in $(seq 1 "$RUNS"); do
   for mode in decoder_only pipeline; do
     args=()
-    [ "$mode" = decoder_only ] && args=(--decoder-only)
+    if [ "$mode" = decoder_only ]; then args=(--decoder-only); else read -r -a args <<< "$PIPELINE_ARGS"; fi
     out="$WORK/out-$mode"
     rm -rf "$out"
     load_before=$(cut -d' ' -f1 /proc/loadavg)
     /usr/bin/time -f "%U %S" -o "$WORK/time.txt" \
-      "$BIN" -q barcodes scan --video "$SCAN/scan.avi" --out "$out" --threads "$THREADS" "${args[@]}" --json > "$WORK/scan.json"
+      "$BIN" -q barcodes scan --video "$SCAN/scan.avi" --out "$out" --threads "$THREADS" ${args[@]+"${args[@]}"} --json > "$WORK/scan.json"
     "$BIN" -q barcodes eval --truth "$SCAN/truth.csv" --inventory "$out/inventory.csv" --json > "$WORK/eval.json"
     load_after=$(cut -d' ' -f1 /proc/loadavg)
     cpu=$(awk '{print $1 + $2}' "$WORK/time.txt")
@@ -68,5 +73,6 @@ for mode in ("decoder_only", "pipeline"):
 out["speedup_wall"] = out["pipeline"]["fps_median"] / out["decoder_only"]["fps_median"]
 out["speedup_cpu"] = out["decoder_only"]["cpu_seconds_median"] / out["pipeline"]["cpu_seconds_median"]
 out["cores"] = __import__("os").cpu_count()
+out["pipeline_args"] = sys.argv[1]
 print(json.dumps(out, indent=2))
-' | tee bench-out/barcodes_scan.json
+' "$PIPELINE_ARGS" | tee "$SUMMARY"
