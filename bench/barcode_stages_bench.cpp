@@ -52,7 +52,7 @@ void BM_DirectionEstimation(benchmark::State& s) {
 BENCHMARK(BM_DirectionEstimation)->Unit(benchmark::kMillisecond);
 
 void BM_WholeFrameDecoder(benchmark::State& s) {
-  const barcode::ZXingDecoder d(true);
+  const barcode::ZXingDecoder d(barcode::ZXingSearch::thorough);
   for (auto _ : s) benchmark::DoNotOptimize(d.decode(frame(), 32));
 }
 BENCHMARK(BM_WholeFrameDecoder)->Unit(benchmark::kMillisecond);
@@ -60,8 +60,10 @@ BENCHMARK(BM_WholeFrameDecoder)->Unit(benchmark::kMillisecond);
 void BM_PipelineFrame(benchmark::State& s) {
   barcode::StageSettings st;
   st.region.threshold = 0.6;
-  const barcode::ZXingDecoder whole(true), crop(false);
-  const barcode::DecoderSet ds{whole, crop};
+  using barcode::ZXingSearch;
+  const barcode::ZXingDecoder whole(ZXingSearch::thorough), on_frame(ZXingSearch::rotated), crop(ZXingSearch::quick),
+      upright(ZXingSearch::quick, 3);
+  const barcode::DecoderSet ds{whole, on_frame, crop, upright};
   for (auto _ : s) benchmark::DoNotOptimize(barcode::read_frame(frame(), st, ds, true, false, true, 32));
 }
 BENCHMARK(BM_PipelineFrame)->Unit(benchmark::kMillisecond);

@@ -79,13 +79,13 @@ std::vector<DecodedSymbol> CombinedDecoder::decode(const cv::Mat& gray, int max_
   return found;
 }
 
-std::unique_ptr<Decoder> make_decoder(DecoderKind kind, bool thorough) {
+std::unique_ptr<Decoder> make_decoder(DecoderKind kind, ZXingSearch search, int min_lines) {
   switch (kind) {
-    case DecoderKind::zxing: return std::make_unique<ZXingDecoder>(thorough);
+    case DecoderKind::zxing: return std::make_unique<ZXingDecoder>(search, min_lines);
     case DecoderKind::zbar: return std::make_unique<ZBarDecoder>();
-    case DecoderKind::both: return std::make_unique<CombinedDecoder>(thorough);
+    case DecoderKind::both: return std::make_unique<CombinedDecoder>(search, min_lines);
   }
-  return std::make_unique<ZXingDecoder>(thorough);
+  return std::make_unique<ZXingDecoder>(search, min_lines);
 }
 
 }  // namespace builtscene::barcode

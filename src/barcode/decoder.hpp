@@ -34,6 +34,11 @@ class Decoder {
   virtual std::string name() const = 0;
 };
 
+// How hard zxing-cpp searches an image. quick: rows only (tryHarder: every few rows);
+// rotated: rows, then columns (its 90-degree retry); thorough: also a downscaled pyramid
+// (zxing-cpp's defaults, the decoder alone).
+enum class ZXingSearch { quick, rotated, thorough };
+
 // zxing-cpp 1.4 aborts the process on an internal assertion (Result::operator==, lineCount() == 1)
 // when one ReadBarcodes call gathers several 1D symbols and then compares a symbol that already
 // has two scan lines. This decoder never asks zxing for more than one symbol per call: a search
@@ -42,14 +47,18 @@ class Decoder {
 // so far painted over.
 class ZXingDecoder final : public Decoder {
  public:
-  // thorough = false: no 90-degree retry and no downscaled pyramid, for small crops that the
-  // pipeline has already cut out and turns upright itself.
-  explicit ZXingDecoder(bool thorough = true) : thorough_(thorough) {}
+  // quick: for crops that the pipeline has already cut out and turns upright itself.
+  // min_lines: scan lines that must agree on a symbol (zxing's default is 2). Uprighted region
+  // patches use 3: resampled bars of a weak symbology (Code 39 has no check character) can
+  // otherwise give one-off misreads, e.g. "/650831" for P650831 on the generated 2000-frame scan.
+  explicit ZXingDecoder(ZXingSearch search = ZXingSearch::thorough, int min_lines = 2)
+      : search_(search), min_lines_(min_lines) {}
   std::vector<DecodedSymbol> decode(const cv::Mat& gray, int max_symbols) const override;
   std::string name() const override { return "zxing"; }
 
  private:
-  bool thorough_;
+  ZXingSearch search_;
+  int min_lines_;
 };
 
 class ZBarDecoder final : public Decoder {
@@ -61,7 +70,7 @@ class ZBarDecoder final : public Decoder {
 // zxing first; ZBar for whatever zxing did not read.
 class CombinedDecoder final : public Decoder {
  public:
-  explicit CombinedDecoder(bool thorough = true) : zxing_(thorough) {}
+  explicit CombinedDecoder(ZXingSearch search = ZXingSearch::thorough, int min_lines = 2) : zxing_(search, min_lines) {}
   std::vector<DecodedSymbol> decode(const cv::Mat& gray, int max_symbols) const override;
   std::string name() const override { return "both"; }
 
@@ -70,8 +79,8 @@ class CombinedDecoder final : public Decoder {
   ZBarDecoder zbar_;
 };
 
-// thorough: see ZXingDecoder (ZBar has no such setting).
-std::unique_ptr<Decoder> make_decoder(DecoderKind kind, bool thorough = true);
+// search, min_lines: see ZXingDecoder (ZBar has no such settings).
+std::unique_ptr<Decoder> make_decoder(DecoderKind kind, ZXingSearch search = ZXingSearch::thorough, int min_lines = 2);
 
 namespace detail {
 cv::Mat as_gray_continuous(const cv::Mat& image);

@@ -18,7 +18,7 @@ std::optional<double> DirectionEstimator::scan_angle(const cv::Mat& image) const
     gray = image;
   }
   // Angles do not depend on scale: large regions are estimated on a smaller copy.
-  const double shrink = 320.0 / std::max(gray.cols, gray.rows);
+  const double shrink = static_cast<double>(std::max(32, options_.max_side)) / std::max(gray.cols, gray.rows);
   if (shrink < 1.0) cv::resize(gray, gray, cv::Size(), shrink, shrink, cv::INTER_AREA);
   std::vector<cv::Point2f> corners;
   cv::goodFeaturesToTrack(gray, corners, options_.max_corners, options_.harris_quality, 2.0, cv::noArray(), 3,
@@ -31,36 +31,51 @@ std::optional<double> DirectionEstimator::scan_angle(const cv::Mat& image) const
   const double rho_step = 2.0;
   const int n_rho = static_cast<int>(std::ceil(2.0 * diag / rho_step)) + 1;
   std::vector<int> acc(static_cast<std::size_t>(n_theta * n_rho), 0);
-  std::vector<double> cs(n_theta), sn(n_theta);
+  // Single precision and a table per theta: the vote loop is the estimator's hot spot (corners x 180).
+  std::vector<float> cs(n_theta), sn(n_theta);
   for (int t = 0; t < n_theta; ++t) {
     const double th = t * std::numbers::pi / 180.0;
-    cs[static_cast<std::size_t>(t)] = std::cos(th);
-    sn[static_cast<std::size_t>(t)] = std::sin(th);
+    cs[static_cast<std::size_t>(t)] = static_cast<float>(std::cos(th) / rho_step);
+    sn[static_cast<std::size_t>(t)] = static_cast<float>(std::sin(th) / rho_step);
   }
+  // rho + diag >= 0, so adding 0.5 and truncating rounds to the nearest bin.
+  const float offset = static_cast<float>(diag / rho_step) + 0.5f;
   for (const auto& p : corners) {
-    for (int t = 0; t < n_theta; ++t) {
-      const double rho = p.x * cs[static_cast<std::size_t>(t)] + p.y * sn[static_cast<std::size_t>(t)];
-      const int r = static_cast<int>(std::lround((rho + diag) / rho_step));
-      ++acc[static_cast<std::size_t>(t * n_rho + r)];
+    int* row = acc.data();
+    for (int t = 0; t < n_theta; ++t, row += n_rho) {
+      const float rho = p.x * cs[static_cast<std::size_t>(t)] + p.y * sn[static_cast<std::size_t>(t)];
+      ++row[static_cast<int>(rho + offset)];
     }
   }
   // Peaks: the strongest cells, each suppressing its neighbourhood (+-3 degrees, +-2 rho bins).
   struct Peak {
     int votes, t, r;
   };
+  // Only the strongest few hundred cells can become peaks: find the vote count of the 400th
+  // strongest from a histogram of counts, and collect only the cells at or above it.
+  constexpr std::size_t kCandidates = 400;
+  int max_votes = 0;
+  for (const int v : acc) max_votes = std::max(max_votes, v);
+  std::vector<std::size_t> per_count(static_cast<std::size_t>(max_votes) + 1, 0);
+  for (const int v : acc) ++per_count[static_cast<std::size_t>(v)];
+  int min_votes = max_votes;
+  for (std::size_t above = 0; min_votes > 3; --min_votes) {
+    above += per_count[static_cast<std::size_t>(min_votes)];
+    if (above >= kCandidates) break;
+  }
+  min_votes = std::max(min_votes, 3);
   std::vector<Peak> cells;
   for (int t = 0; t < n_theta; ++t)
     for (int r = 0; r < n_rho; ++r) {
       const int v = acc[static_cast<std::size_t>(t * n_rho + r)];
-      if (v >= 3) cells.push_back({v, t, r});
+      if (v >= min_votes) cells.push_back({v, t, r});
     }
-  // Only the strongest few hundred cells can become peaks.
   const auto stronger = [](const Peak& a, const Peak& b) {
     if (a.votes != b.votes) return a.votes > b.votes;
     if (a.t != b.t) return a.t < b.t;
     return a.r < b.r;
   };
-  const std::size_t keep = std::min<std::size_t>(cells.size(), 400);
+  const std::size_t keep = std::min(cells.size(), kCandidates);
   std::partial_sort(cells.begin(), cells.begin() + static_cast<std::ptrdiff_t>(keep), cells.end(), stronger);
   cells.resize(keep);
   std::vector<Peak> peaks;

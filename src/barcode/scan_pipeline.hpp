@@ -16,6 +16,7 @@
 #include "barcode/inventory.hpp"
 #include "barcode/key_frame_selector.hpp"
 #include "barcode/region_detector.hpp"
+#include "core/stage_timer.hpp"
 
 namespace builtscene::barcode {
 
@@ -53,6 +54,7 @@ struct ScanResult {
   std::size_t rotated_reads = 0;  // reads that needed direction estimation
   double region_threshold = 0;  // the threshold used (chosen when auto)
   double seconds = 0;
+  double cpu_seconds = 0;       // user + system time of the process during the scan (all threads)
   nlohmann::json stage_ms;
   nlohmann::json summary() const;  // frames, keyframes, codes, reads, fps, stage_ms, ...
 };
@@ -64,18 +66,32 @@ struct FrameRead {
   bool rotated = false;
 };
 
-// The decoders of a scan: `whole` searches whole frames thoroughly, `crop` reads region crops.
+// The decoders of a scan. `whole`: zxing-cpp's thorough search (its defaults: 90-degree retry,
+// downscaled pyramid), the decoder alone on whole frames. `frame`: the pipeline's whole-key-frame
+// pass, rows and columns without the pyramid (on the generated 2000-frame scan the pyramid read
+// nothing more, at twice the cost; the columns keep symbols turned by 90 degrees, which region
+// detection often misses). `crop`: quick search of region crops. `upright`: quick search of
+// uprighted region patches with 3 agreeing scan lines.
 struct DecoderSet {
   const Decoder& whole;
+  const Decoder& frame;
   const Decoder& crop;
+  const Decoder& upright;
 };
 
-// Reads one frame (no key-frame logic): the decoder alone on the whole frame (decoder_only or
-// regions off); otherwise optionally the whole frame first, then every region holding no symbol
-// yet as is, then turned upright by the estimated direction when that fails. Thread-safe.
+// Reads one frame (no key-frame logic): the thorough decoder alone on the whole frame
+// (decoder_only or regions off); otherwise optionally the `frame` decoder on the whole frame first,
+// then every region holding no symbol yet: as is (only when the whole frame was not read, since
+// that read the same pixels already), then turned upright by the estimated direction. Thread-safe.
+// `timer`, when given, receives per-stage times (whole_frame, regions, direction, upright_decode).
 std::vector<FrameRead> read_frame(const cv::Mat& frame, const StageSettings& settings, const DecoderSet& decoders,
                                   bool rotate, bool decoder_only, bool whole_frame, int max_symbols,
-                                  std::size_t* regions = nullptr);
+                                  std::size_t* regions = nullptr, StageTimer* timer = nullptr);
+
+// The region turned upright: the part of `gray` covered by `region`'s box (with a margin), resampled
+// along the scan direction `scan_angle_deg` (bars vertical). Cheaper than turning the region's
+// whole axis-aligned bounds, and the symbol fills the result, so the decoder scans fewer pixels.
+cv::Mat upright_region(const cv::Mat& gray, const Region& region, double scan_angle_deg);
 
 // Picks the region threshold that reads the most distinct codes (then the most reads) on the
 // sample frames; ties go to the threshold nearest 0.45.

@@ -58,8 +58,9 @@ std::vector<DecodedSymbol> ZXingDecoder::decode(const cv::Mat& image, int max_sy
   using F = ZXing::BarcodeFormat;
   hints.setFormats(F::Codabar | F::Code39 | F::Code93 | F::Code128 | F::EAN8 | F::EAN13 | F::ITF | F::UPCA | F::UPCE);
   hints.setTryHarder(true);
-  hints.setTryRotate(thorough_);
-  hints.setTryDownscale(thorough_);
+  hints.setTryRotate(search_ != ZXingSearch::quick);
+  hints.setTryDownscale(search_ == ZXingSearch::thorough);
+  hints.setMinLineCount(static_cast<uint8_t>(std::clamp(min_lines_, 1, 16)));
   // The one setting that keeps zxing-cpp 1.4 away from its multi-symbol assertion (see header).
   hints.setMaxNumberOfSymbols(1);
   bool painted = false;
