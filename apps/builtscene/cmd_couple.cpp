@@ -2,6 +2,7 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <cmath>
 #include <filesystem>
 #include <memory>
 
@@ -16,6 +17,7 @@
 #include "couple/prototype_generator.hpp"
 #include "couple/status.hpp"
 #include "couple/time_series_plot.hpp"
+#include "couple/nats_transport.hpp"
 #include "couple/transport.hpp"
 
 namespace builtscene::app {
@@ -57,24 +59,31 @@ const bool new_model = register_command({
 
 struct LaunchCliOptions {
   fs::path scenario, record;
-  std::string transport;
+  std::string transport, nats;
 };
 
 const bool launch_cmd = register_command({
     .path = {"couple", "launch"},
-    .description = "Run a scenario: every model its own process (udpm) or thread (memq)",
+    .description = "Run a scenario: every model its own process (udpm, mediator) or thread (memq)",
     .setup = [](CLI::App& cmd) -> Action {
       auto o = std::make_shared<LaunchCliOptions>();
       cmd.add_option("scenario", o->scenario, "Scenario (YAML)")->required();
       cmd.add_option("--record", o->record, "Record every channel to this LCM log (lcm-logplayer replays it)");
-      cmd.add_option("--transport", o->transport, "Override the scenario's transport (udpm://..., memq://NAME)");
+      cmd.add_option("--transport", o->transport,
+                     "Override the scenario's transport (udpm://..., nats://HOST:PORT, mediator, memq://NAME)");
+      cmd.add_option("--nats", o->nats,
+                     "Use this running mediator (nats://HOST:PORT) instead of starting a local nats-server");
       return [o] {
         ScenarioConfig sc = load_scenario(o->scenario);
         if (!o->transport.empty()) {
-          make_transport(o->transport);  // validates the URL before anything starts
+          if (o->transport != kMediator) make_transport(o->transport);  // validates the URL before anything starts
           sc.transport = o->transport;
         }
+        if (!o->nats.empty() && !is_nats_url(o->nats))
+          throw InputError("--nats '" + o->nats + "': expected nats://HOST:PORT");
+        if (!o->nats.empty()) make_transport(o->nats);  // reachable before anything starts
         LaunchOptions lo;
+        lo.nats = o->nats;
         lo.record = o->record;
         lo.scenario_file = o->scenario;
         const LaunchResult r = launch(sc, lo);
@@ -82,7 +91,6 @@ const bool launch_cmd = register_command({
                      o->record.empty() ? "" : ", log " + o->record.string());
         json j = r.to_json();
         j["scenario"] = sc.name;
-        j["transport"] = sc.transport;
         if (!o->record.empty()) j["record"] = o->record.string();
         return j;
       };
@@ -247,14 +255,14 @@ const bool spy_cmd = register_command({
     .description = "Show live channels: messages, rate, last step, model status",
     .setup = [](CLI::App& cmd) -> Action {
       auto o = std::make_shared<SpyOptions>();
-      cmd.add_option("--url", o->url, "Transport URL")->capture_default_str();
+      auto* url_opt = cmd.add_option("--url", o->url, "Transport URL (udpm://..., nats://HOST:PORT)")->capture_default_str();
       cmd.add_option("--scenario", o->scenario, "Scenario (its transport and message types)");
       cmd.add_option("--duration", o->duration, "Stop after this many seconds (default: until Ctrl-C)");
-      return [o] {
+      return [o, url_opt] {
         TypeRegistry types;
         if (!o->scenario.empty()) {
           auto sc = load_scenario(o->scenario);
-          o->url = sc.transport;
+          if (url_opt->count() == 0) o->url = sc.transport;  // an explicit --url wins (e.g. a launched mediator)
           types = std::move(sc.types);
         }
         add_builtin_types(types);
@@ -301,7 +309,8 @@ const bool spy_cmd = register_command({
               out += fmt::format("{:<24} {:<24} {:>10} {:>10.0f} {:>10}\n", ch, c.type, c.count,
                                  static_cast<double>(c.count - prev[ch]) / dt, c.last_step >= -1 ? std::to_string(c.last_step) : "");
             for (const auto& [m, s] : models)
-              out += fmt::format("model {:<18} step {}/{} {}{}\n", m, s.step, s.steps, state_name(s.state),
+              out += fmt::format("model {:<18} step {}/{} granted {:g} s {}{}\n", m, s.step, s.steps, s.granted,
+                                 state_name(s.state),
                                  s.waiting.empty() ? "" : " waits for " + s.waiting[0].first + " step " + std::to_string(s.waiting[0].second));
             std::fputs(out.c_str(), stderr);
             for (const auto& [ch, c] : chans) prev[ch] = c.count;
@@ -311,7 +320,11 @@ const bool spy_cmd = register_command({
         }
         json j = json::object();
         for (const auto& [ch, c] : chans) j[ch] = {{"messages", c.count}, {"type", c.type}, {"last_step", c.last_step}};
-        return json{{"channels", j}};
+        json jm = json::object();
+        for (const auto& [m, s] : models)  // granted: null when unbounded (a model without inputs)
+          jm[m] = {{"step", s.step}, {"steps", s.steps}, {"state", state_name(s.state)},
+                   {"granted", std::isfinite(s.granted) ? json(s.granted) : json(nullptr)}};
+        return json{{"channels", j}, {"models", jm}};
       };
     },
     .order = 50});

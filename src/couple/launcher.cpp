@@ -16,6 +16,7 @@
 #include "couple/lcm_codec.hpp"
 #include "couple/lcm_log.hpp"
 #include "couple/message_wrapper.hpp"
+#include "couple/nats_server.hpp"
 #include "couple/status.hpp"
 #include "couple/transport.hpp"
 
@@ -115,7 +116,10 @@ class Monitor {
     for (const auto& [name, s] : statuses_) {
       if (s.state == ModelState::kDone) continue;
       r += (r.empty() ? "" : "; ") + std::string("model '") + name + "' at step " + std::to_string(s.step);
-      if (!s.waiting.empty()) {
+      if (!s.waiting.empty() && s.waiting[0].first.rfind("(", 0) == 0) {
+        r += " waits for " + s.waiting[0].first.substr(1, s.waiting[0].first.size() - 2) + ", granted time " +
+             fmt::format("{:g}", s.granted) + " s";
+      } else if (!s.waiting.empty()) {
         r += " waits for channel '" + s.waiting[0].first + "' step " + std::to_string(s.waiting[0].second);
         for (const auto& m : sc_.models)
           for (const auto& p : m.publish)
@@ -243,7 +247,7 @@ std::string describe_exit(int status) {
   return "stopped";
 }
 
-LaunchResult launch_processes(const ScenarioConfig& sc, const LaunchOptions& opt) {
+LaunchResult launch_processes(const ScenarioConfig& sc, const LaunchOptions& opt, NatsServer* server) {
   auto tr = make_transport(sc.transport);
   Monitor mon(sc, *tr, opt.record);
   std::filesystem::path exe = opt.executable.empty() ? std::filesystem::read_symlink("/proc/self/exe") : opt.executable;
@@ -268,6 +272,8 @@ LaunchResult launch_processes(const ScenarioConfig& sc, const LaunchOptions& opt
     int status = 0;
     pid_t pid;
     while ((pid = waitpid(-1, &status, block ? 0 : WNOHANG)) > 0) {
+      if (server && pid == server->pid() && failure.empty() && !stop_flag())
+        failure = "the mediator (nats-server) " + describe_exit(status);
       auto it = children.find(pid);
       if (it == children.end()) continue;
       exit_status[it->second] = status;
@@ -314,6 +320,7 @@ LaunchResult launch_processes(const ScenarioConfig& sc, const LaunchOptions& opt
   }
   mon.show(true);
   LaunchResult r = finish(sc, mon, start);
+  if (server) r.mediator_cpu_seconds = server->cpu_seconds();
   if (!failure.empty())
     throw Failure(failure + "; the other models were stopped" +
                   (opt.record.empty() ? "" : " (log kept: " + opt.record.string() + ")"));
@@ -337,14 +344,32 @@ void install_stop_signals() {
 }
 
 nlohmann::json LaunchResult::to_json() const {
-  return {{"models", model_steps}, {"steps", steps}, {"seconds", seconds}, {"run_seconds", run_seconds},
-          {"steps_per_second", steps_per_second},
-          {"logged_events", logged_events}};
+  nlohmann::json j = {{"models", model_steps}, {"steps", steps}, {"seconds", seconds}, {"run_seconds", run_seconds},
+                      {"steps_per_second", steps_per_second}, {"logged_events", logged_events},
+                      {"transport", transport}};
+  if (mediator_cpu_seconds >= 0) j["mediator_cpu_seconds"] = mediator_cpu_seconds;
+  return j;
 }
 
-LaunchResult launch(const ScenarioConfig& sc, const LaunchOptions& opt) {
+LaunchResult launch(const ScenarioConfig& scenario, const LaunchOptions& opt) {
   install_stop_signals();
-  return is_in_process(sc.transport) ? launch_threads(sc, opt) : launch_processes(sc, opt);
+  if (is_in_process(scenario.transport) && opt.nats.empty()) {
+    LaunchResult r = launch_threads(scenario, opt);
+    r.transport = scenario.transport;
+    return r;
+  }
+  ScenarioConfig sc = scenario;
+  std::optional<NatsServer> server;  // stopped last, on every way out of this function
+  if (!opt.nats.empty()) {
+    sc.transport = opt.nats;
+  } else if (sc.transport == kMediator) {
+    server.emplace();
+    sc.transport = server->url();
+    spdlog::info("couple: mediator (nats-server, JetStream) at {}", sc.transport);
+  }
+  LaunchResult r = launch_processes(sc, opt, server ? &*server : nullptr);
+  r.transport = sc.transport;
+  return r;
 }
 
 int run_model_process(const std::filesystem::path& scenario_file, const std::string& model,

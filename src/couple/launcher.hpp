@@ -20,6 +20,9 @@ struct LaunchOptions {
   std::filesystem::path executable;  // the builtscene binary (default /proc/self/exe)
   std::filesystem::path scenario_file;  // passed to model processes
   bool show_progress = true;
+  // The mediator (transport `mediator`): empty starts a local nats-server for the run;
+  // nats://HOST:PORT uses that server (and then applies to any scenario transport).
+  std::string nats;
 };
 
 struct LaunchResult {
@@ -29,6 +32,8 @@ struct LaunchResult {
   double steps_per_second = 0;  // steps / run_seconds
   int64_t logged_events = 0;
   std::map<std::string, int64_t> model_steps;
+  std::string transport;            // the URL the models used
+  double mediator_cpu_seconds = -1;  // CPU of the nats-server the launcher started (-1: none)
   nlohmann::json to_json() const;
 };
 

@@ -8,6 +8,7 @@
 #include "core/errors.hpp"
 #include "core/logging.hpp"
 #include "couple/lcm_codec.hpp"
+#include "couple/time_manager.hpp"
 
 namespace builtscene::couple {
 namespace {
@@ -69,10 +70,11 @@ struct MessageWrapper::Impl {
   ModelStatus status;
   Clock::time_point last_status{};
   std::string self_channel_note;
+  TimeManager time;
 
   Impl(const ScenarioConfig& s, const std::string& model, Transport& t, std::unique_ptr<ModelFunction> f,
        WrapperOptions o)
-      : sc(s), cfg(s.model(model)), tr(t), fn(std::move(f)), opt(std::move(o)) {
+      : sc(s), cfg(s.model(model)), tr(t), fn(std::move(f)), opt(std::move(o)), time(s, model) {
     total = cfg.steps();
     status.model = cfg.name;
     status.steps = total;
@@ -118,6 +120,7 @@ struct MessageWrapper::Impl {
       spdlog::warn("{}: dropped a message on '{}': {}", cfg.name, in.sub->channel, e.what());
       return;
     }
+    time.on_message(in.sub->channel, step);
     if (step < oldest_needed(in, n)) return;  // a late duplicate
     in.buffer.try_emplace(step, d, d + size);
   }
@@ -129,6 +132,7 @@ struct MessageWrapper::Impl {
     } catch (const InputError&) {
       return;
     }
+    time.on_status(s.model, s.step, s.state == ModelState::kDone);
     for (auto& out : outputs) {
       for (auto& c : out.consumers) {
         if (c.model != s.model) continue;
@@ -177,6 +181,15 @@ struct MessageWrapper::Impl {
     return true;
   }
 
+  // The inputs are there; the time grant must cover them too (it also covers messages
+  // that are on their way but not yet here).
+  bool granted(std::pair<std::string, int64_t>* blocked) {
+    std::string holder;
+    if (time.may_advance(n, &holder)) return true;
+    if (blocked) *blocked = {"(time grant from " + holder + ")", n};
+    return false;
+  }
+
   bool flow_ok(std::pair<std::string, int64_t>* blocked) {
     for (auto& out : outputs)
       for (auto& c : out.consumers)
@@ -218,6 +231,7 @@ struct MessageWrapper::Impl {
     for (const auto& in : inputs)
       status.needs.emplace_back(in.sub->channel, n >= total ? std::numeric_limits<int64_t>::max() : oldest_needed(in, n));
     status.error = error;
+    status.granted = time.granted();
     const auto bytes = encode_status(sc.types, status);
     tr.publish(kStatusChannel, bytes.data(), bytes.size());
     last_status = Clock::now();
@@ -241,7 +255,7 @@ struct MessageWrapper::Impl {
     while (!stop_requested()) {
       tr.handle(0);
       if (n < total) {
-        if (gather(&wait) && flow_ok(&wait)) {
+        if (gather(&wait) && granted(&wait) && flow_ok(&wait)) {
           compute();
           continue;
         }

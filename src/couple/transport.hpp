@@ -3,7 +3,8 @@
 //   udpm://GROUP:PORT?ttl=0   LCM UDP multicast (processes, hosts on a LAN)
 //   memq://NAME               an in-process bus shared by every endpoint with the same
 //                             NAME (models as threads of one process; tests)
-// A later mediator transport (issue 11) implements the same interface.
+//   nats://HOST:PORT          the mediator: a NATS server (nats_transport.hpp)
+//   mediator                  a NATS server that `couple launch` starts for the run
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -29,5 +30,7 @@ class Transport {
 std::unique_ptr<Transport> make_transport(const std::string& url);
 
 bool is_in_process(const std::string& url);  // memq://
+
+inline constexpr const char* kMediator = "mediator";
 
 }  // namespace builtscene::couple
