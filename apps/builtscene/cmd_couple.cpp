@@ -60,6 +60,7 @@ const bool new_model = register_command({
 struct LaunchCliOptions {
   fs::path scenario, record;
   std::string transport, nats;
+  std::vector<std::string> kills;
 };
 
 const bool launch_cmd = register_command({
@@ -73,6 +74,9 @@ const bool launch_cmd = register_command({
                      "Override the scenario's transport (udpm://..., nats://HOST:PORT, mediator, memq://NAME)");
       cmd.add_option("--nats", o->nats,
                      "Use this running mediator (nats://HOST:PORT) instead of starting a local nats-server");
+      cmd.add_option("--kill", o->kills,
+                     "Fault injection: SIGKILL MODEL's process at STEP (MODEL@STEP, repeatable); the launcher "
+                     "restarts it and it resumes from the mediator's history");
       return [o] {
         ScenarioConfig sc = load_scenario(o->scenario);
         if (!o->transport.empty()) {
@@ -84,6 +88,19 @@ const bool launch_cmd = register_command({
         if (!o->nats.empty()) make_transport(o->nats);  // reachable before anything starts
         LaunchOptions lo;
         lo.nats = o->nats;
+        for (const auto& k : o->kills) {
+          const auto at = k.rfind('@');
+          int64_t step = -1;
+          try {
+            if (at == std::string::npos) throw std::invalid_argument(k);
+            std::size_t used = 0;
+            step = std::stoll(k.substr(at + 1), &used);
+            if (used != k.size() - at - 1) throw std::invalid_argument(k);
+          } catch (const std::exception&) {
+            throw InputError("--kill '" + k + "': expected MODEL@STEP, e.g. structure@3000");
+          }
+          lo.kills.emplace_back(k.substr(0, at), step);
+        }
         lo.record = o->record;
         lo.scenario_file = o->scenario;
         const LaunchResult r = launch(sc, lo);
@@ -100,7 +117,8 @@ const bool launch_cmd = register_command({
 struct RunModelOptions {
   fs::path scenario;
   std::string model, transport;
-  bool recorder = false;
+  bool recorder = false, resume = false;
+  int64_t kill_at = -1;
 };
 
 const bool run_model = register_command({
@@ -112,8 +130,10 @@ const bool run_model = register_command({
       cmd.add_option("--model", o->model, "Model name")->required();
       cmd.add_option("--transport", o->transport, "Transport URL (default: the scenario's)");
       cmd.add_flag("--recorder", o->recorder, "The launcher records: re-send lost messages to it too");
+      cmd.add_flag("--resume", o->resume, "Restarted after a crash: replay the inputs' history from the mediator");
+      cmd.add_option("--kill-at", o->kill_at, "Fault injection: SIGKILL this process at this step");
       return [o] {
-        const int rc = run_model_process(o->scenario, o->model, o->transport, o->recorder);
+        const int rc = run_model_process(o->scenario, o->model, o->transport, o->recorder, o->resume, o->kill_at);
         if (rc != 0) throw Failure("model '" + o->model + "' stopped");
         return json{{"model", o->model}};
       };

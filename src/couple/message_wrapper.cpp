@@ -1,5 +1,8 @@
 #include "couple/message_wrapper.hpp"
 
+#include <signal.h>
+#include <unistd.h>
+
 #include <chrono>
 #include <limits>
 #include <map>
@@ -53,6 +56,7 @@ struct MessageWrapper::Impl {
     std::vector<Consumer> consumers;  // other models reading this channel
     int64_t last = std::numeric_limits<int64_t>::min();
     Clock::time_point last_republish{};
+    int64_t published_before = std::numeric_limits<int64_t>::min();  // resume: steps up to here are out already
   };
 
   const ScenarioConfig& sc;
@@ -87,6 +91,10 @@ struct MessageWrapper::Impl {
             out.consumers.push_back({m.name, &m, &sub, sub.expected_step(0) - (sub.history - 1)});
       }
       if (opt.recorder) out.consumers.push_back({kRecorderName, nullptr, nullptr, p.initial ? -1 : 0});
+      if (opt.resume) {
+        const Bytes last = tr.last_stored(p.channel);
+        if (!last.empty()) out.published_before = out.codec.read_int64(last.data(), last.size(), kStepField);
+      }
       outputs.push_back(std::move(out));
     }
     for (const auto& sub : cfg.subscribe) {
@@ -102,9 +110,11 @@ struct MessageWrapper::Impl {
     }
     for (std::size_t i = 0; i < inputs.size(); ++i) {
       if (inputs[i].self) continue;  // our own outputs go straight into the buffer
-      tr.subscribe(inputs[i].sub->channel, [this, i](const std::string&, const uint8_t* d, std::size_t size) {
-        on_input(i, d, size);
-      });
+      auto handler = [this, i](const std::string&, const uint8_t* d, std::size_t size) { on_input(i, d, size); };
+      if (opt.resume && tr.keeps_history())
+        tr.subscribe_from_start(inputs[i].sub->channel, handler);
+      else
+        tr.subscribe(inputs[i].sub->channel, handler);
     }
     tr.subscribe(kStatusChannel, [this](const std::string&, const uint8_t* d, std::size_t size) { on_status(d, size); });
     args.resize(inputs.size());
@@ -201,7 +211,7 @@ struct MessageWrapper::Impl {
   }
 
   void publish_output(Output& out, int64_t step, Bytes bytes) {
-    tr.publish(out.pub->channel, bytes.data(), bytes.size());
+    if (step > out.published_before) tr.publish(out.pub->channel, bytes.data(), bytes.size());
     out.last = step;
     for (auto& in : inputs)
       if (in.self && in.sub->channel == out.pub->channel) in.buffer.emplace(step, bytes);
@@ -285,6 +295,10 @@ struct MessageWrapper::Impl {
   }
 
   void compute() {
+    if (n == opt.kill_at) {
+      spdlog::warn("{}: --kill: SIGKILL at step {}", cfg.name, n);
+      ::kill(::getpid(), SIGKILL);
+    }
     // A model stuck in its function still shows which step it is computing.
     if (Clock::now() - last_status > std::chrono::milliseconds(100)) send_status(ModelState::kRunning, nullptr);
     try {

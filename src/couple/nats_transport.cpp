@@ -28,6 +28,8 @@ void check_channel(const std::string& url, const std::string& channel) {
                      "' is not a valid NATS subject (no spaces, '*', '>' or empty '.' parts)");
 }
 
+std::string stream_name(const std::string& prefix) { return "BS_" + prefix; }
+
 class NatsTransport final : public Transport {
  public:
   NatsTransport(std::string url, std::string address, std::string prefix)
@@ -59,7 +61,74 @@ class NatsTransport final : public Transport {
     }
     for (auto& sub : subs_) natsSubscription_Destroy(sub.sub);
     natsConnection_FlushTimeout(conn_, 2000);  // what we published reaches the server
+    if (js_) jsCtx_Destroy(js_);
     natsConnection_Destroy(conn_);
+  }
+
+  void make_history_stream(const std::vector<std::string>& channels, int64_t max_per_channel) {
+    std::vector<std::string> subjects;
+    for (const auto& c : channels) {
+      check_channel(url_, c);
+      subjects.push_back(prefix_ + "." + c);
+    }
+    std::vector<const char*> ptrs;
+    for (const auto& s : subjects) ptrs.push_back(s.c_str());
+    const std::string name = stream_name(prefix_);
+    jsStreamConfig cfg;
+    jsStreamConfig_Init(&cfg);
+    cfg.Name = name.c_str();
+    cfg.Subjects = ptrs.data();
+    cfg.SubjectsLen = static_cast<int>(ptrs.size());
+    cfg.MaxMsgsPerSubject = max_per_channel;
+    cfg.Storage = js_FileStorage;
+    jsStreamInfo* si = nullptr;
+    jsErrCode jerr = static_cast<jsErrCode>(0);
+    const natsStatus s = js_AddStream(&si, jetstream(), &cfg, nullptr, &jerr);
+    if (si) jsStreamInfo_Destroy(si);
+    if (s != NATS_OK)
+      throw Failure("mediator " + url_ + ": cannot create the history stream " + name + " (is JetStream enabled?): " +
+                    status_text(s));
+  }
+
+  bool keeps_history() const override { return true; }
+
+  void subscribe_from_start(const std::string& channel, Handler handler) override {
+    check_channel(url_, channel);
+    const std::string subject = prefix_ + "." + channel;
+    auto slot = std::make_unique<Slot>(Slot{this, subs_.size()});
+    jsSubOptions so;
+    jsSubOptions_Init(&so);
+    so.Stream = stream_.c_str();
+    so.Ordered = true;  // no acks; the library re-creates the consumer on a gap
+    so.Config.DeliverPolicy = js_DeliverAll;
+    natsSubscription* sub = nullptr;
+    jsErrCode jerr = static_cast<jsErrCode>(0);
+    natsStatus s = js_Subscribe(&sub, jetstream(), subject.c_str(), &NatsTransport::on_message, slot.get(), nullptr,
+                                &so, &jerr);
+    if (s == NATS_OK) s = natsSubscription_SetPendingLimits(sub, -1, -1);
+    if (s == NATS_OK) s = natsSubscription_SetOnCompleteCB(sub, &NatsTransport::on_complete, this);
+    if (s != NATS_OK) {
+      if (sub) natsSubscription_Destroy(sub);
+      throw Failure("mediator " + url_ + ": cannot replay '" + subject + "' from stream " + stream_ + ": " +
+                    status_text(s));
+    }
+    std::lock_guard lock(m_);
+    subs_.push_back({sub, std::move(handler), std::move(slot)});
+  }
+
+  std::vector<uint8_t> last_stored(const std::string& channel) override {
+    check_channel(url_, channel);
+    const std::string subject = prefix_ + "." + channel;
+    natsMsg* msg = nullptr;
+    jsErrCode jerr = static_cast<jsErrCode>(0);
+    const natsStatus s = js_GetLastMsg(&msg, jetstream(), stream_.c_str(), subject.c_str(), nullptr, &jerr);
+    if (s == NATS_NOT_FOUND || (s != NATS_OK && jerr == JSNoMessageFoundErr)) return {};
+    if (s != NATS_OK)
+      throw Failure("mediator " + url_ + ": cannot read the history of '" + channel + "': " + status_text(s));
+    const auto* d = reinterpret_cast<const uint8_t*>(natsMsg_GetData(msg));
+    std::vector<uint8_t> out(d, d + natsMsg_GetDataLength(msg));
+    natsMsg_Destroy(msg);
+    return out;
   }
 
   void subscribe(const std::string& channel, Handler handler) override {
@@ -137,8 +206,17 @@ class NatsTransport final : public Transport {
     self->cv_.notify_all();
   }
 
-  std::string url_, prefix_;
+  jsCtx* jetstream() {
+    if (!js_) {
+      const natsStatus s = natsConnection_JetStream(&js_, conn_, nullptr);
+      if (s != NATS_OK) throw Failure("mediator " + url_ + ": no JetStream context: " + status_text(s));
+    }
+    return js_;
+  }
+
+  std::string url_, prefix_, stream_ = stream_name(prefix_);
   natsConnection* conn_ = nullptr;
+  jsCtx* js_ = nullptr;
   std::vector<Sub> subs_;  // added before traffic starts (the wrapper subscribes up front)
   std::mutex m_;           // guards queue_ and completed_
   std::condition_variable cv_;
@@ -167,6 +245,11 @@ std::unique_ptr<Transport> make_nats_transport(const std::string& url) {
     prefix = query.substr(7);
   }
   return std::make_unique<NatsTransport>(url, address, prefix);
+}
+
+void create_history_stream(const std::string& url, const std::vector<std::string>& channels, int64_t max_per_channel) {
+  auto t = make_nats_transport(url);
+  static_cast<NatsTransport&>(*t).make_history_stream(channels, max_per_channel);
 }
 
 }  // namespace builtscene::couple

@@ -5,10 +5,17 @@
 // server under different prefixes. Model code and the wrapper do not change.
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "couple/transport.hpp"
 
 namespace builtscene::couple {
+
+// Recovery: a JetStream stream keeps the history of the run's data channels (on subjects
+// P.C), at most `max_per_channel` messages each (the oldest are dropped). A transport on
+// the same URL then offers subscribe_from_start() and last_stored(). Throws Failure.
+void create_history_stream(const std::string& url, const std::vector<std::string>& channels,
+                           int64_t max_per_channel);
 
 // Throws InputError for a malformed URL, Failure when the server cannot be reached.
 std::unique_ptr<Transport> make_nats_transport(const std::string& url);

@@ -9,6 +9,7 @@
 #include <functional>
 #include <memory>
 #include <string>
+#include <vector>
 
 namespace builtscene::couple {
 
@@ -23,6 +24,13 @@ class Transport {
   // Returns the number delivered (0 on timeout or interruption).
   virtual int handle(int timeout_ms) = 0;
   virtual std::string url() const = 0;
+
+  // Recovery (a mediator that keeps each channel's history, see nats_transport.hpp).
+  virtual bool keeps_history() const { return false; }
+  // Like subscribe(), but from the channel's first stored message, then live.
+  virtual void subscribe_from_start(const std::string& channel, Handler handler) { subscribe(channel, std::move(handler)); }
+  // The newest stored message of a channel; empty when none is stored.
+  virtual std::vector<uint8_t> last_stored(const std::string& /*channel*/) { return {}; }
 };
 
 // Throws InputError for an unknown scheme, Failure when the transport cannot start

@@ -251,3 +251,53 @@ TEST(Mediator, AStalledModelIsReportedByName) {
       << r.out;
   EXPECT_EQ(couple_test::left_over(d), "");
 }
+
+TEST(Mediator, KilledModelsAreRestartedAndTheResultsAreBitIdentical) {
+  const auto dir = couple_test::temp_dir("mediator_kill");
+  const std::string scenario = couple_test::kExample + "/scenario-mediator.yaml";
+  const std::string launch = kBin + " couple launch " + scenario;
+  // The uninterrupted run, then one where the structure is killed at step 3000 and the
+  // controller at step 4500 (each resumes by replaying its inputs from JetStream).
+  const auto a = run_script(dir, in_tmp(dir, launch + " --record " + (dir / "a.lcmlog").string() + " > /dev/null") +
+                                     "\n" + kBin + " couple export " + (dir / "a.lcmlog").string() + " --scenario " +
+                                     scenario + " --csv " + (dir / "a").string() + " > /dev/null\n");
+  ASSERT_EQ(a.code, 0) << a.out;
+  const auto b = run_script(dir, in_tmp(dir, launch + " --kill structure@3000 --kill controller@4500 --record " +
+                                                 (dir / "b.lcmlog").string() + " --json > " +
+                                                 (dir / "b.json").string()) +
+                                     "\n" + kBin + " couple export " + (dir / "b.lcmlog").string() + " --scenario " +
+                                     scenario + " --csv " + (dir / "b").string() + " > /dev/null\n");
+  ASSERT_EQ(b.code, 0) << b.out;
+  EXPECT_NE(b.out.find("model 'structure' was killed by signal Killed at step"), std::string::npos) << b.out;
+  EXPECT_NE(b.out.find("model 'controller' was killed by signal Killed at step"), std::string::npos) << b.out;
+  const json summary = json::parse(std::ifstream(dir / "b.json"));
+  EXPECT_EQ(summary["restarts"]["structure"], 1) << summary.dump();
+  EXPECT_EQ(summary["restarts"]["controller"], 1) << summary.dump();
+  EXPECT_EQ(summary["models"]["structure"], 6000);
+  for (const std::string ch : {"WIND", "STRUCTURE", "CONTROL"}) {
+    const auto fa = dir / "a" / (ch + ".csv"), fb = dir / "b" / (ch + ".csv");
+    ASSERT_TRUE(std::filesystem::exists(fb)) << fb;
+    EXPECT_EQ(couple_test::run("wc -l < " + fa.string()).out, "6001\n") << ch;  // header + 6000 steps
+    EXPECT_EQ(couple_test::run("cmp " + fa.string() + " " + fb.string()).code, 0) << ch << " differs";
+  }
+  // And the interrupted run still equals the monolithic reference.
+  std::size_t compared = 0;
+  EXPECT_LE(worst_difference(dir / "b.lcmlog", scenario, &compared), 1e-12);
+  EXPECT_EQ(couple_test::left_over(dir), "");
+}
+
+TEST(Mediator, BadKillOptionsAreClearErrors) {
+  const std::string launch = kBin + " couple launch " + couple_test::kExample;
+  auto r = couple_test::run(launch + "/scenario-mediator.yaml --kill nobody@5");
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("no model named 'nobody'"), std::string::npos) << r.out;
+  r = couple_test::run(launch + "/scenario-mediator.yaml --kill structure@soon");
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("--kill 'structure@soon': expected MODEL@STEP"), std::string::npos) << r.out;
+  r = couple_test::run(launch + "/scenario-mediator.yaml --kill structure@6000");
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("the step must be in 0..5999"), std::string::npos) << r.out;
+  r = couple_test::run(launch + "/scenario.yaml --kill structure@5");
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("--kill needs the mediator"), std::string::npos) << r.out;
+}
