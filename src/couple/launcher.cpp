@@ -249,14 +249,14 @@ std::string describe_exit(int status) {
   return "stopped";
 }
 
-LaunchResult launch_processes(const ScenarioConfig& sc, const LaunchOptions& opt, NatsServer* server) {
+LaunchResult launch_processes(const ScenarioConfig& sc, const LaunchOptions& opt, NatsServer* server,
+                              bool recovery) {
   auto tr = make_transport(sc.transport);
   Monitor mon(sc, *tr, opt.record);
   std::filesystem::path exe = opt.executable.empty() ? std::filesystem::read_symlink("/proc/self/exe") : opt.executable;
   const std::string scenario = std::filesystem::absolute(opt.scenario_file.empty() ? sc.file : opt.scenario_file);
   std::map<pid_t, std::string> children;
   const auto start = Clock::now();
-  const bool recovery = is_nats_url(sc.transport);  // the mediator keeps the history to resume from
   auto spawn = [&](const std::string& model, bool resume) {
     std::vector<std::string> args = {exe.string(), "couple", "run-model", scenario, "--model", model,
                                      "--transport", sc.transport};
@@ -402,13 +402,21 @@ LaunchResult launch(const ScenarioConfig& scenario, const LaunchOptions& opt) {
     sc.transport = server->url();
     spdlog::info("couple: mediator (nats-server, JetStream) at {}", sc.transport);
   }
+  bool history = false;
   if (is_nats_url(sc.transport)) {
     std::vector<std::string> channels;
     for (const auto& m : sc.models)
       for (const auto& p : m.publish) channels.push_back(p.channel);
-    create_history_stream(sc.transport, channels, opt.history_per_channel);
+    try {
+      create_history_stream(sc.transport, channels, opt.history_per_channel);
+      history = true;
+    } catch (const Failure& e) {
+      if (!opt.kills.empty()) throw;
+      // A plain NATS server (no JetStream) still carries the run, without recovery.
+      spdlog::warn("couple: {}; running without recovery (a model that dies ends the run)", e.what());
+    }
   }
-  LaunchResult r = launch_processes(sc, opt, server ? &*server : nullptr);
+  LaunchResult r = launch_processes(sc, opt, server ? &*server : nullptr, history);
   r.transport = sc.transport;
   return r;
 }

@@ -170,6 +170,8 @@ TEST(Mediator, NatsOptionUsesARunningServer) {
       "\nrc=$?\nkill -0 $S && echo server-still-running\nkill $S\nwait $S\nexit $rc\n");
   ASSERT_EQ(r.code, 0) << r.out;
   EXPECT_NE(r.out.find("server-still-running"), std::string::npos) << r.out;
+  // This server has no JetStream: the run goes on without recovery, and says so.
+  EXPECT_NE(r.out.find("running without recovery"), std::string::npos) << r.out;
   const json summary = json::parse(std::ifstream(dir / "out.json"));
   EXPECT_NE(summary["transport"].get<std::string>().find("?prefix=run1"), std::string::npos) << summary.dump();
   EXPECT_FALSE(summary.contains("mediator_cpu_seconds"));  // not started by the launcher
