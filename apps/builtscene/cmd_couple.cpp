@@ -2,6 +2,7 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <cmath>
 #include <filesystem>
 #include <memory>
 
@@ -16,6 +17,7 @@
 #include "couple/prototype_generator.hpp"
 #include "couple/status.hpp"
 #include "couple/time_series_plot.hpp"
+#include "couple/nats_transport.hpp"
 #include "couple/transport.hpp"
 
 namespace builtscene::app {
@@ -57,24 +59,48 @@ const bool new_model = register_command({
 
 struct LaunchCliOptions {
   fs::path scenario, record;
-  std::string transport;
+  std::string transport, nats;
+  std::vector<std::string> kills;
 };
 
 const bool launch_cmd = register_command({
     .path = {"couple", "launch"},
-    .description = "Run a scenario: every model its own process (udpm) or thread (memq)",
+    .description = "Run a scenario: every model its own process (udpm, mediator) or thread (memq)",
     .setup = [](CLI::App& cmd) -> Action {
       auto o = std::make_shared<LaunchCliOptions>();
       cmd.add_option("scenario", o->scenario, "Scenario (YAML)")->required();
       cmd.add_option("--record", o->record, "Record every channel to this LCM log (lcm-logplayer replays it)");
-      cmd.add_option("--transport", o->transport, "Override the scenario's transport (udpm://..., memq://NAME)");
+      cmd.add_option("--transport", o->transport,
+                     "Override the scenario's transport (udpm://..., nats://HOST:PORT, mediator, memq://NAME)");
+      cmd.add_option("--nats", o->nats,
+                     "Use this running mediator (nats://HOST:PORT) instead of starting a local nats-server");
+      cmd.add_option("--kill", o->kills,
+                     "Fault injection: SIGKILL MODEL's process at STEP (MODEL@STEP, repeatable); the launcher "
+                     "restarts it and it resumes from the mediator's history");
       return [o] {
         ScenarioConfig sc = load_scenario(o->scenario);
         if (!o->transport.empty()) {
-          make_transport(o->transport);  // validates the URL before anything starts
+          if (o->transport != kMediator) make_transport(o->transport);  // validates the URL before anything starts
           sc.transport = o->transport;
         }
+        if (!o->nats.empty() && !is_nats_url(o->nats))
+          throw InputError("--nats '" + o->nats + "': expected nats://HOST:PORT");
+        if (!o->nats.empty()) make_transport(o->nats);  // reachable before anything starts
         LaunchOptions lo;
+        lo.nats = o->nats;
+        for (const auto& k : o->kills) {
+          const auto at = k.rfind('@');
+          int64_t step = -1;
+          try {
+            if (at == std::string::npos) throw std::invalid_argument(k);
+            std::size_t used = 0;
+            step = std::stoll(k.substr(at + 1), &used);
+            if (used != k.size() - at - 1) throw std::invalid_argument(k);
+          } catch (const std::exception&) {
+            throw InputError("--kill '" + k + "': expected MODEL@STEP, e.g. structure@3000");
+          }
+          lo.kills.emplace_back(k.substr(0, at), step);
+        }
         lo.record = o->record;
         lo.scenario_file = o->scenario;
         const LaunchResult r = launch(sc, lo);
@@ -82,7 +108,6 @@ const bool launch_cmd = register_command({
                      o->record.empty() ? "" : ", log " + o->record.string());
         json j = r.to_json();
         j["scenario"] = sc.name;
-        j["transport"] = sc.transport;
         if (!o->record.empty()) j["record"] = o->record.string();
         return j;
       };
@@ -92,7 +117,8 @@ const bool launch_cmd = register_command({
 struct RunModelOptions {
   fs::path scenario;
   std::string model, transport;
-  bool recorder = false;
+  bool recorder = false, resume = false;
+  int64_t kill_at = -1;
 };
 
 const bool run_model = register_command({
@@ -104,8 +130,10 @@ const bool run_model = register_command({
       cmd.add_option("--model", o->model, "Model name")->required();
       cmd.add_option("--transport", o->transport, "Transport URL (default: the scenario's)");
       cmd.add_flag("--recorder", o->recorder, "The launcher records: re-send lost messages to it too");
+      cmd.add_flag("--resume", o->resume, "Restarted after a crash: replay the inputs' history from the mediator");
+      cmd.add_option("--kill-at", o->kill_at, "Fault injection: SIGKILL this process at this step");
       return [o] {
-        const int rc = run_model_process(o->scenario, o->model, o->transport, o->recorder);
+        const int rc = run_model_process(o->scenario, o->model, o->transport, o->recorder, o->resume, o->kill_at);
         if (rc != 0) throw Failure("model '" + o->model + "' stopped");
         return json{{"model", o->model}};
       };
@@ -247,14 +275,14 @@ const bool spy_cmd = register_command({
     .description = "Show live channels: messages, rate, last step, model status",
     .setup = [](CLI::App& cmd) -> Action {
       auto o = std::make_shared<SpyOptions>();
-      cmd.add_option("--url", o->url, "Transport URL")->capture_default_str();
+      auto* url_opt = cmd.add_option("--url", o->url, "Transport URL (udpm://..., nats://HOST:PORT)")->capture_default_str();
       cmd.add_option("--scenario", o->scenario, "Scenario (its transport and message types)");
       cmd.add_option("--duration", o->duration, "Stop after this many seconds (default: until Ctrl-C)");
-      return [o] {
+      return [o, url_opt] {
         TypeRegistry types;
         if (!o->scenario.empty()) {
           auto sc = load_scenario(o->scenario);
-          o->url = sc.transport;
+          if (url_opt->count() == 0) o->url = sc.transport;  // an explicit --url wins (e.g. a launched mediator)
           types = std::move(sc.types);
         }
         add_builtin_types(types);
@@ -301,7 +329,8 @@ const bool spy_cmd = register_command({
               out += fmt::format("{:<24} {:<24} {:>10} {:>10.0f} {:>10}\n", ch, c.type, c.count,
                                  static_cast<double>(c.count - prev[ch]) / dt, c.last_step >= -1 ? std::to_string(c.last_step) : "");
             for (const auto& [m, s] : models)
-              out += fmt::format("model {:<18} step {}/{} {}{}\n", m, s.step, s.steps, state_name(s.state),
+              out += fmt::format("model {:<18} step {}/{} granted {:g} s {}{}\n", m, s.step, s.steps, s.granted,
+                                 state_name(s.state),
                                  s.waiting.empty() ? "" : " waits for " + s.waiting[0].first + " step " + std::to_string(s.waiting[0].second));
             std::fputs(out.c_str(), stderr);
             for (const auto& [ch, c] : chans) prev[ch] = c.count;
@@ -311,7 +340,11 @@ const bool spy_cmd = register_command({
         }
         json j = json::object();
         for (const auto& [ch, c] : chans) j[ch] = {{"messages", c.count}, {"type", c.type}, {"last_step", c.last_step}};
-        return json{{"channels", j}};
+        json jm = json::object();
+        for (const auto& [m, s] : models)  // granted: null when unbounded (a model without inputs)
+          jm[m] = {{"step", s.step}, {"steps", s.steps}, {"state", state_name(s.state)},
+                   {"granted", std::isfinite(s.granted) ? json(s.granted) : json(nullptr)}};
+        return json{{"channels", j}, {"models", jm}};
       };
     },
     .order = 50});

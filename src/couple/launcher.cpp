@@ -16,6 +16,8 @@
 #include "couple/lcm_codec.hpp"
 #include "couple/lcm_log.hpp"
 #include "couple/message_wrapper.hpp"
+#include "couple/nats_server.hpp"
+#include "couple/nats_transport.hpp"
 #include "couple/status.hpp"
 #include "couple/transport.hpp"
 
@@ -106,6 +108,7 @@ class Monitor {
       if (s.state == ModelState::kFailed) return s.error.empty() ? "model '" + name + "' failed" : s.error;
     return std::nullopt;
   }
+  void touch() { last_progress_ = Clock::now(); }  // a restarted model gets a fresh timeout
   double idle_seconds() const { return std::chrono::duration<double>(Clock::now() - last_progress_).count(); }
   // Start-up (loading plugins, starting interpreters) gets more time than a step.
   bool stalled(double timeout) const { return idle_seconds() > (all_started_ ? timeout : 3 * timeout + 10); }
@@ -115,7 +118,10 @@ class Monitor {
     for (const auto& [name, s] : statuses_) {
       if (s.state == ModelState::kDone) continue;
       r += (r.empty() ? "" : "; ") + std::string("model '") + name + "' at step " + std::to_string(s.step);
-      if (!s.waiting.empty()) {
+      if (!s.waiting.empty() && s.waiting[0].first.rfind("(", 0) == 0) {
+        r += " waits for " + s.waiting[0].first.substr(1, s.waiting[0].first.size() - 2) + ", granted time " +
+             fmt::format("{:g}", s.granted) + " s";
+      } else if (!s.waiting.empty()) {
         r += " waits for channel '" + s.waiting[0].first + "' step " + std::to_string(s.waiting[0].second);
         for (const auto& m : sc_.models)
           for (const auto& p : m.publish)
@@ -243,33 +249,57 @@ std::string describe_exit(int status) {
   return "stopped";
 }
 
-LaunchResult launch_processes(const ScenarioConfig& sc, const LaunchOptions& opt) {
+LaunchResult launch_processes(const ScenarioConfig& sc, const LaunchOptions& opt, NatsServer* server,
+                              bool recovery) {
   auto tr = make_transport(sc.transport);
   Monitor mon(sc, *tr, opt.record);
   std::filesystem::path exe = opt.executable.empty() ? std::filesystem::read_symlink("/proc/self/exe") : opt.executable;
   const std::string scenario = std::filesystem::absolute(opt.scenario_file.empty() ? sc.file : opt.scenario_file);
   std::map<pid_t, std::string> children;
   const auto start = Clock::now();
-  for (const auto& m : sc.models) {
+  auto spawn = [&](const std::string& model, bool resume) {
+    std::vector<std::string> args = {exe.string(), "couple", "run-model", scenario, "--model", model,
+                                     "--transport", sc.transport};
+    if (!opt.record.empty()) args.push_back("--recorder");
+    if (resume) args.push_back("--resume");
+    for (const auto& [m, step] : opt.kills)
+      if (m == model && !resume) args.insert(args.end(), {"--kill-at", std::to_string(step)});
+    std::vector<char*> argv;
+    for (auto& a : args) argv.push_back(a.data());
+    argv.push_back(nullptr);
     const pid_t pid = fork();
     if (pid < 0) throw Failure("fork failed");
     if (pid == 0) {
-      execl(exe.c_str(), exe.c_str(), "couple", "run-model", scenario.c_str(), "--model", m.name.c_str(),
-            "--transport", sc.transport.c_str(), opt.record.empty() ? nullptr : "--recorder",
-            static_cast<char*>(nullptr));
+      execv(exe.c_str(), argv.data());
       std::fprintf(stderr, "cannot run %s: %s\n", exe.c_str(), std::strerror(errno));
       _exit(127);
     }
-    children[pid] = m.name;
-  }
+    children[pid] = model;
+  };
+  for (const auto& m : sc.models) spawn(m.name, false);
   std::string failure;
-  std::map<std::string, int> exit_status;
+  std::map<std::string, int> exit_status, restarts;
   auto reap = [&](bool block) {
     int status = 0;
     pid_t pid;
     while ((pid = waitpid(-1, &status, block ? 0 : WNOHANG)) > 0) {
+      if (server && pid == server->pid() && failure.empty() && !stop_flag())
+        failure = "the mediator (nats-server) " + describe_exit(status);
       auto it = children.find(pid);
       if (it == children.end()) continue;
+      const std::string model = it->second;
+      // A process that died by a signal (kill -9, a crash) is restarted while the run goes
+      // on; it replays its inputs from the mediator's history.
+      if (recovery && !block && failure.empty() && !stop_flag() && WIFSIGNALED(status) &&
+          restarts[model] < opt.max_restarts) {
+        ++restarts[model];
+        spdlog::warn("couple: model '{}' {} at step {}; restarting it (attempt {}), it resumes from the mediator's history",
+                     model, describe_exit(status), mon.statuses().at(model).step, restarts[model]);
+        children.erase(it);
+        mon.touch();
+        spawn(model, true);
+        continue;
+      }
       exit_status[it->second] = status;
       if (failure.empty() && !(WIFEXITED(status) && WEXITSTATUS(status) == 0) && !stop_flag()) {
         tr->handle(0);  // pick up its last status (the model's own error message)
@@ -314,6 +344,8 @@ LaunchResult launch_processes(const ScenarioConfig& sc, const LaunchOptions& opt
   }
   mon.show(true);
   LaunchResult r = finish(sc, mon, start);
+  if (server) r.mediator_cpu_seconds = server->cpu_seconds();
+  for (const auto& [m, k] : restarts) r.restarts[m] = k;
   if (!failure.empty())
     throw Failure(failure + "; the other models were stopped" +
                   (opt.record.empty() ? "" : " (log kept: " + opt.record.string() + ")"));
@@ -337,18 +369,60 @@ void install_stop_signals() {
 }
 
 nlohmann::json LaunchResult::to_json() const {
-  return {{"models", model_steps}, {"steps", steps}, {"seconds", seconds}, {"run_seconds", run_seconds},
-          {"steps_per_second", steps_per_second},
-          {"logged_events", logged_events}};
+  nlohmann::json j = {{"models", model_steps}, {"steps", steps}, {"seconds", seconds}, {"run_seconds", run_seconds},
+                      {"steps_per_second", steps_per_second}, {"logged_events", logged_events},
+                      {"transport", transport}};
+  if (mediator_cpu_seconds >= 0) j["mediator_cpu_seconds"] = mediator_cpu_seconds;
+  j["restarts"] = restarts;
+  return j;
 }
 
-LaunchResult launch(const ScenarioConfig& sc, const LaunchOptions& opt) {
+LaunchResult launch(const ScenarioConfig& scenario, const LaunchOptions& opt) {
   install_stop_signals();
-  return is_in_process(sc.transport) ? launch_threads(sc, opt) : launch_processes(sc, opt);
+  for (const auto& [m, step] : opt.kills) {
+    scenario.model(m);  // InputError naming an unknown model
+    if (step < 0 || step >= scenario.model(m).steps())
+      throw InputError("--kill " + m + "@" + std::to_string(step) + ": the step must be in 0.." +
+                       std::to_string(scenario.model(m).steps() - 1));
+  }
+  if (!opt.kills.empty() && opt.nats.empty() && scenario.transport != kMediator && !is_nats_url(scenario.transport))
+    throw InputError("--kill needs the mediator (transport: mediator, nats://HOST:PORT or --nats): over '" +
+                     scenario.transport + "' a killed model has no history to resume from");
+  if (is_in_process(scenario.transport) && opt.nats.empty()) {
+    LaunchResult r = launch_threads(scenario, opt);
+    r.transport = scenario.transport;
+    return r;
+  }
+  ScenarioConfig sc = scenario;
+  std::optional<NatsServer> server;  // stopped last, on every way out of this function
+  if (!opt.nats.empty()) {
+    sc.transport = opt.nats;
+  } else if (sc.transport == kMediator) {
+    server.emplace();
+    sc.transport = server->url();
+    spdlog::info("couple: mediator (nats-server, JetStream) at {}", sc.transport);
+  }
+  bool history = false;
+  if (is_nats_url(sc.transport)) {
+    std::vector<std::string> channels;
+    for (const auto& m : sc.models)
+      for (const auto& p : m.publish) channels.push_back(p.channel);
+    try {
+      create_history_stream(sc.transport, channels, opt.history_per_channel);
+      history = true;
+    } catch (const Failure& e) {
+      if (!opt.kills.empty()) throw;
+      // A plain NATS server (no JetStream) still carries the run, without recovery.
+      spdlog::warn("couple: {}; running without recovery (a model that dies ends the run)", e.what());
+    }
+  }
+  LaunchResult r = launch_processes(sc, opt, server ? &*server : nullptr, history);
+  r.transport = sc.transport;
+  return r;
 }
 
 int run_model_process(const std::filesystem::path& scenario_file, const std::string& model,
-                      const std::string& transport, bool recorder) {
+                      const std::string& transport, bool recorder, bool resume, int64_t kill_at) {
   install_stop_signals();
   const ScenarioConfig sc = load_scenario(scenario_file);
   const ModelConfig& cfg = sc.model(model);
@@ -358,6 +432,8 @@ int run_model_process(const std::filesystem::path& scenario_file, const std::str
   wo.stop = &stop_flag();
   wo.linger_seconds = sc.timeout_seconds;
   wo.recorder = recorder;
+  wo.resume = resume;
+  wo.kill_at = kill_at;
   MessageWrapper w(sc, model, *tr, load_model_function(cfg, sc.types), wo);
   w.run();
   return w.stopped() ? 130 : 0;

@@ -10,6 +10,7 @@
 #include <optional>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <vector>
 
 #include "couple/model_config.hpp"
 
@@ -20,6 +21,14 @@ struct LaunchOptions {
   std::filesystem::path executable;  // the builtscene binary (default /proc/self/exe)
   std::filesystem::path scenario_file;  // passed to model processes
   bool show_progress = true;
+  // The mediator (transport `mediator`): empty starts a local nats-server for the run;
+  // nats://HOST:PORT uses that server (and then applies to any scenario transport).
+  std::string nats;
+  // Fault injection: SIGKILL model M's process when it reaches step S (M, S); the launcher
+  // restarts it and it resumes from the mediator's history. Needs the mediator.
+  std::vector<std::pair<std::string, int64_t>> kills;
+  int64_t history_per_channel = 1000000;  // JetStream: messages kept per channel
+  int max_restarts = 3;                   // per model
 };
 
 struct LaunchResult {
@@ -29,6 +38,9 @@ struct LaunchResult {
   double steps_per_second = 0;  // steps / run_seconds
   int64_t logged_events = 0;
   std::map<std::string, int64_t> model_steps;
+  std::string transport;            // the URL the models used
+  double mediator_cpu_seconds = -1;  // CPU of the nats-server the launcher started (-1: none)
+  std::map<std::string, int> restarts;  // models restarted after dying by a signal
   nlohmann::json to_json() const;
 };
 
@@ -39,7 +51,8 @@ LaunchResult launch(const ScenarioConfig& scenario, const LaunchOptions& options
 // The body of one model process (`builtscene couple run-model`): returns the exit code.
 // `transport` overrides the scenario's (the launcher passes its own).
 int run_model_process(const std::filesystem::path& scenario_file, const std::string& model,
-                      const std::string& transport = "", bool recorder = false);
+                      const std::string& transport = "", bool recorder = false, bool resume = false,
+                      int64_t kill_at = -1);
 
 // SIGINT/SIGTERM set this; wrappers and the launcher poll it.
 std::atomic<bool>& stop_flag();

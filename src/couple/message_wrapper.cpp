@@ -1,5 +1,8 @@
 #include "couple/message_wrapper.hpp"
 
+#include <signal.h>
+#include <unistd.h>
+
 #include <chrono>
 #include <limits>
 #include <map>
@@ -8,6 +11,7 @@
 #include "core/errors.hpp"
 #include "core/logging.hpp"
 #include "couple/lcm_codec.hpp"
+#include "couple/time_manager.hpp"
 
 namespace builtscene::couple {
 namespace {
@@ -52,6 +56,7 @@ struct MessageWrapper::Impl {
     std::vector<Consumer> consumers;  // other models reading this channel
     int64_t last = std::numeric_limits<int64_t>::min();
     Clock::time_point last_republish{};
+    int64_t published_before = std::numeric_limits<int64_t>::min();  // resume: steps up to here are out already
   };
 
   const ScenarioConfig& sc;
@@ -69,10 +74,11 @@ struct MessageWrapper::Impl {
   ModelStatus status;
   Clock::time_point last_status{};
   std::string self_channel_note;
+  TimeManager time;
 
   Impl(const ScenarioConfig& s, const std::string& model, Transport& t, std::unique_ptr<ModelFunction> f,
        WrapperOptions o)
-      : sc(s), cfg(s.model(model)), tr(t), fn(std::move(f)), opt(std::move(o)) {
+      : sc(s), cfg(s.model(model)), tr(t), fn(std::move(f)), opt(std::move(o)), time(s, model) {
     total = cfg.steps();
     status.model = cfg.name;
     status.steps = total;
@@ -85,6 +91,10 @@ struct MessageWrapper::Impl {
             out.consumers.push_back({m.name, &m, &sub, sub.expected_step(0) - (sub.history - 1)});
       }
       if (opt.recorder) out.consumers.push_back({kRecorderName, nullptr, nullptr, p.initial ? -1 : 0});
+      if (opt.resume) {
+        const Bytes last = tr.last_stored(p.channel);
+        if (!last.empty()) out.published_before = out.codec.read_int64(last.data(), last.size(), kStepField);
+      }
       outputs.push_back(std::move(out));
     }
     for (const auto& sub : cfg.subscribe) {
@@ -100,9 +110,11 @@ struct MessageWrapper::Impl {
     }
     for (std::size_t i = 0; i < inputs.size(); ++i) {
       if (inputs[i].self) continue;  // our own outputs go straight into the buffer
-      tr.subscribe(inputs[i].sub->channel, [this, i](const std::string&, const uint8_t* d, std::size_t size) {
-        on_input(i, d, size);
-      });
+      auto handler = [this, i](const std::string&, const uint8_t* d, std::size_t size) { on_input(i, d, size); };
+      if (opt.resume && tr.keeps_history())
+        tr.subscribe_from_start(inputs[i].sub->channel, handler);
+      else
+        tr.subscribe(inputs[i].sub->channel, handler);
     }
     tr.subscribe(kStatusChannel, [this](const std::string&, const uint8_t* d, std::size_t size) { on_status(d, size); });
     args.resize(inputs.size());
@@ -118,6 +130,7 @@ struct MessageWrapper::Impl {
       spdlog::warn("{}: dropped a message on '{}': {}", cfg.name, in.sub->channel, e.what());
       return;
     }
+    time.on_message(in.sub->channel, step);
     if (step < oldest_needed(in, n)) return;  // a late duplicate
     in.buffer.try_emplace(step, d, d + size);
   }
@@ -129,6 +142,7 @@ struct MessageWrapper::Impl {
     } catch (const InputError&) {
       return;
     }
+    time.on_status(s.model, s.step, s.state == ModelState::kDone);
     for (auto& out : outputs) {
       for (auto& c : out.consumers) {
         if (c.model != s.model) continue;
@@ -177,6 +191,15 @@ struct MessageWrapper::Impl {
     return true;
   }
 
+  // The inputs are there; the time grant must cover them too (it also covers messages
+  // that are on their way but not yet here).
+  bool granted(std::pair<std::string, int64_t>* blocked) {
+    std::string holder;
+    if (time.may_advance(n, &holder)) return true;
+    if (blocked) *blocked = {"(time grant from " + holder + ")", n};
+    return false;
+  }
+
   bool flow_ok(std::pair<std::string, int64_t>* blocked) {
     for (auto& out : outputs)
       for (auto& c : out.consumers)
@@ -188,7 +211,7 @@ struct MessageWrapper::Impl {
   }
 
   void publish_output(Output& out, int64_t step, Bytes bytes) {
-    tr.publish(out.pub->channel, bytes.data(), bytes.size());
+    if (step > out.published_before) tr.publish(out.pub->channel, bytes.data(), bytes.size());
     out.last = step;
     for (auto& in : inputs)
       if (in.self && in.sub->channel == out.pub->channel) in.buffer.emplace(step, bytes);
@@ -218,6 +241,7 @@ struct MessageWrapper::Impl {
     for (const auto& in : inputs)
       status.needs.emplace_back(in.sub->channel, n >= total ? std::numeric_limits<int64_t>::max() : oldest_needed(in, n));
     status.error = error;
+    status.granted = time.granted();
     const auto bytes = encode_status(sc.types, status);
     tr.publish(kStatusChannel, bytes.data(), bytes.size());
     last_status = Clock::now();
@@ -241,7 +265,7 @@ struct MessageWrapper::Impl {
     while (!stop_requested()) {
       tr.handle(0);
       if (n < total) {
-        if (gather(&wait) && flow_ok(&wait)) {
+        if (gather(&wait) && granted(&wait) && flow_ok(&wait)) {
           compute();
           continue;
         }
@@ -271,6 +295,10 @@ struct MessageWrapper::Impl {
   }
 
   void compute() {
+    if (n == opt.kill_at) {
+      spdlog::warn("{}: --kill: SIGKILL at step {}", cfg.name, n);
+      ::kill(::getpid(), SIGKILL);
+    }
     // A model stuck in its function still shows which step it is computing.
     if (Clock::now() - last_status > std::chrono::milliseconds(100)) send_status(ModelState::kRunning, nullptr);
     try {

@@ -28,6 +28,12 @@ struct WrapperOptions {
   // The launcher records the run: treat its recorder (status name kRecorderName) as a
   // consumer of every output, so lost messages are re-sent to it too.
   bool recorder = false;
+  // Recovery: a restarted model re-runs from step 0 on its inputs' history (the
+  // transport must keep it) and publishes only the steps it had not published before.
+  bool resume = false;
+  // Fault injection (`couple launch --kill MODEL@STEP`): SIGKILL this process when it
+  // reaches this step (before computing it); -1: never.
+  int64_t kill_at = -1;
   // Called after each step with the step's outputs (used by tests and the monolithic check).
   std::function<void(int64_t step)> on_step;
 };

@@ -134,8 +134,8 @@ const ModelConfig& ScenarioConfig::model(const std::string& name) const {
 ModelConfig load_model_config(const fs::path& file) {
   const YAML::Node root = load_yaml(file);
   check_keys(file, root,
-             {"name", "dt", "end_time", "plugin", "command", "parameters", "messages", "subscribe", "publish",
-              "transport"},
+             {"name", "dt", "end_time", "lookahead", "plugin", "command", "parameters", "messages", "subscribe",
+              "publish", "transport"},
              "");
   ModelConfig m;
   m.file = file;
@@ -151,6 +151,8 @@ ModelConfig load_model_config(const fs::path& file) {
   if (!(m.end_time > 0)) bad(file, root["end_time"], "field 'end_time' must be positive");
   if (std::abs(m.end_time / m.dt - static_cast<double>(m.steps())) > 1e-6)
     bad(file, root["end_time"], "field 'end_time' must be a whole number of time steps 'dt'");
+  m.lookahead = get_or<double>(file, root, "lookahead", "", 0.0);
+  if (!(m.lookahead >= 0)) bad(file, root["lookahead"], "field 'lookahead' must not be negative (seconds)");
   m.plugin = get_or<std::string>(file, root, "plugin", "", "");
   if (root["command"]) {
     const YAML::Node c = root["command"];

@@ -46,6 +46,9 @@ struct ModelConfig {
   double dt = 0;
   double end_time = 0;
   int64_t steps() const;  // round(end_time / dt)
+  // The model's promise (HLA lookahead): its outputs of time t take effect at t + lookahead
+  // at the earliest; the time manager adds it to every message's time stamp.
+  double lookahead = 0;
   std::string plugin;                  // shared library (name or path) built from a generated stub
   std::vector<std::string> command;    // or: an external program speaking JSON lines
   nlohmann::json parameters = nlohmann::json::object();

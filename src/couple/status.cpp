@@ -2,6 +2,8 @@
 
 #include "couple/lcm_codec.hpp"
 
+#include <limits>
+
 namespace builtscene::couple {
 
 namespace {
@@ -19,6 +21,7 @@ struct status_t {
   string need_channel[nneed];
   int64_t need_step[nneed];
   string error;
+  double granted;
 }
 )";
 }
@@ -40,7 +43,8 @@ void add_builtin_types(TypeRegistry& types) {
 
 std::vector<uint8_t> encode_status(const TypeRegistry& types, const ModelStatus& s) {
   nlohmann::json v = {{"step", s.step}, {"steps", s.steps}, {"utime", s.utime}, {"model", s.model},
-                      {"state", static_cast<int>(s.state)}, {"error", s.error}};
+                      {"state", static_cast<int>(s.state)}, {"error", s.error},
+                      {"granted", s.granted}};
   v["wait_channel"] = nlohmann::json::array();
   v["wait_step"] = nlohmann::json::array();
   for (const auto& [c, n] : s.waiting) {
@@ -65,6 +69,7 @@ ModelStatus decode_status(const TypeRegistry& types, const uint8_t* data, std::s
   s.utime = v["utime"];
   s.state = static_cast<ModelState>(v["state"].get<int>());
   s.error = v["error"];
+  s.granted = v["granted"].is_number() ? v["granted"].get<double>() : std::numeric_limits<double>::infinity();
   for (std::size_t i = 0; i < v["wait_channel"].size(); ++i) s.waiting.emplace_back(v["wait_channel"][i], v["wait_step"][i]);
   for (std::size_t i = 0; i < v["need_channel"].size(); ++i) s.needs.emplace_back(v["need_channel"][i], v["need_step"][i]);
   return s;

@@ -28,6 +28,9 @@ struct ModelStatus {
   std::vector<std::pair<std::string, int64_t>> waiting;  // channel, producer step
   std::vector<std::pair<std::string, int64_t>> needs;    // channel, oldest producer step still needed
   std::string error;
+  // The time manager's grant: no message stamped earlier can still reach the model
+  // (seconds; +inf for a model without inputs).
+  double granted = 0;
 };
 
 // Adds builtscene.status_t to a registry.

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "core/errors.hpp"
+#include "couple/nats_transport.hpp"
 
 namespace builtscene::couple {
 namespace {
@@ -212,7 +213,11 @@ std::unique_ptr<Transport> make_transport(const std::string& url) {
     return std::make_unique<MemqEndpoint>(url, name, drop, seed * 1000003 + instance++);
   }
   if (url.rfind("udpm://", 0) == 0) return std::make_unique<LcmTransport>(url);
-  throw InputError("unknown transport '" + url + "' (use udpm://GROUP:PORT?ttl=0 or memq://NAME)");
+  if (is_nats_url(url)) return make_nats_transport(url);
+  if (url == kMediator)
+    throw InputError("transport 'mediator' means a NATS server that `builtscene couple launch` starts; "
+                     "to connect to a running one, give its nats://HOST:PORT");
+  throw InputError("unknown transport '" + url + "' (use udpm://GROUP:PORT?ttl=0, nats://HOST:PORT, mediator or memq://NAME)");
 }
 
 }  // namespace builtscene::couple

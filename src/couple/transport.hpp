@@ -3,11 +3,13 @@
 //   udpm://GROUP:PORT?ttl=0   LCM UDP multicast (processes, hosts on a LAN)
 //   memq://NAME               an in-process bus shared by every endpoint with the same
 //                             NAME (models as threads of one process; tests)
-// A later mediator transport (issue 11) implements the same interface.
+//   nats://HOST:PORT          the mediator: a NATS server (nats_transport.hpp)
+//   mediator                  a NATS server that `couple launch` starts for the run
 #include <cstdint>
 #include <functional>
 #include <memory>
 #include <string>
+#include <vector>
 
 namespace builtscene::couple {
 
@@ -22,6 +24,13 @@ class Transport {
   // Returns the number delivered (0 on timeout or interruption).
   virtual int handle(int timeout_ms) = 0;
   virtual std::string url() const = 0;
+
+  // Recovery (a mediator that keeps each channel's history, see nats_transport.hpp).
+  virtual bool keeps_history() const { return false; }
+  // Like subscribe(), but from the channel's first stored message, then live.
+  virtual void subscribe_from_start(const std::string& channel, Handler handler) { subscribe(channel, std::move(handler)); }
+  // The newest stored message of a channel; empty when none is stored.
+  virtual std::vector<uint8_t> last_stored(const std::string& /*channel*/) { return {}; }
 };
 
 // Throws InputError for an unknown scheme, Failure when the transport cannot start
@@ -29,5 +38,7 @@ class Transport {
 std::unique_ptr<Transport> make_transport(const std::string& url);
 
 bool is_in_process(const std::string& url);  // memq://
+
+inline constexpr const char* kMediator = "mediator";
 
 }  // namespace builtscene::couple

@@ -3,7 +3,13 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <map>
+#include <nlohmann/json.hpp>
 #include <string>
+
+#include "couple/lcm_codec.hpp"
+#include "couple/lcm_log.hpp"
+#include "couple/model_config.hpp"
 
 namespace couple_test {
 
@@ -37,5 +43,29 @@ inline RunResult run(const std::string& cmd) {
 }
 
 inline const std::string kExample = std::string(BUILTSCENE_SOURCE_DIR) + "/examples/coupling/wind-structure-control";
+
+// Every data message of a recorded log, decoded: channel -> step -> members.
+inline std::map<std::string, std::map<int64_t, nlohmann::json>> read_log(const std::filesystem::path& log,
+                                                                        const builtscene::couple::ScenarioConfig& sc) {
+  using namespace builtscene::couple;
+  std::map<std::string, std::string> type;
+  for (const auto& m : sc.models)
+    for (const auto& p : m.publish) type[p.channel] = p.type;
+  std::map<std::string, std::map<int64_t, nlohmann::json>> out;
+  LcmLogReader r(log);
+  while (auto e = r.next()) {
+    auto it = type.find(e->channel);
+    if (it == type.end()) continue;
+    nlohmann::json v = LcmCodec(sc.types, it->second).decode(e->data);
+    out[e->channel].emplace(v["step"].get<int64_t>(), v);
+  }
+  return out;
+}
+
+// Processes whose command line mentions `dir` (the pattern does not match pgrep's own shell).
+inline std::string left_over(const std::filesystem::path& dir) {
+  const std::string s = dir.string();
+  return run("pgrep -af '[" + s.substr(0, 1) + "]" + s.substr(1) + "'").out;
+}
 
 }  // namespace couple_test

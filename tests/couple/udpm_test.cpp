@@ -42,26 +42,8 @@ std::optional<couple_test::RunResult> in_udpm_namespace(const std::string& scrip
   auto result = in_udpm_namespace(script, &why);    \
   if (!result) GTEST_SKIP() << why;
 
-std::map<std::string, std::map<int64_t, json>> read_log(const std::filesystem::path& log, const ScenarioConfig& sc) {
-  std::map<std::string, std::string> type;
-  for (const auto& m : sc.models)
-    for (const auto& p : m.publish) type[p.channel] = p.type;
-  std::map<std::string, std::map<int64_t, json>> out;
-  LcmLogReader r(log);
-  while (auto e = r.next()) {
-    auto it = type.find(e->channel);
-    if (it == type.end()) continue;
-    json v = LcmCodec(sc.types, it->second).decode(e->data);
-    out[e->channel].emplace(v["step"].get<int64_t>(), v);
-  }
-  return out;
-}
-
-// Processes whose command line mentions `dir` (the pattern does not match pgrep's own shell).
-std::string left_over(const std::filesystem::path& dir) {
-  const std::string s = dir.string();
-  return couple_test::run("pgrep -af '[" + s.substr(0, 1) + "]" + s.substr(1) + "'").out;
-}
+using couple_test::left_over;
+using couple_test::read_log;
 
 double rel(double a, double b) { return a == b ? 0 : std::abs(a - b) / std::max(std::abs(a), std::abs(b)); }
 
