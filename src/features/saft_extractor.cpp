@@ -1,0 +1,28 @@
+#include "features/saft_extractor.hpp"
+
+#include "features/saft_patch.hpp"
+
+namespace builtscene {
+
+SaftExtractor::SaftExtractor(OrbExtractorOptions orb_options, SaftNetwork network)
+    : orb_(orb_options), network_(std::move(network)) {}
+
+void SaftExtractor::extract(const cv::Mat& gray, std::vector<cv::KeyPoint>& keypoints, cv::Mat& descriptors) {
+  cv::Mat binary;
+  orb_.extract(gray, keypoints, binary);
+  if (keypoints.empty()) {
+    descriptors = cv::Mat(0, SaftNetwork::kDimension, CV_32F);
+    return;
+  }
+  const cv::Mat patches = normalize_saft_patches(sample_saft_patches(orb_.levels(), orb_.pyramid().inv_scale, keypoints));
+  network_.describe(patches, descriptors);
+}
+
+DescriptorMetric SaftExtractor::metric() {
+  DescriptorMetric m = DescriptorMetric::float_l2(SaftNetwork::kDimension);
+  m.strict = 0.7f;
+  m.loose = 1.0f;
+  return m;
+}
+
+}  // namespace builtscene
