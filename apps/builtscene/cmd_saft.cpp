@@ -13,6 +13,7 @@
 #include "core/logging.hpp"
 #include "core/progress.hpp"
 #include "core/stage_timer.hpp"
+#include "features/descriptor.hpp"
 #include "features/descriptor_roc.hpp"
 #include "features/patch_verification.hpp"
 #include "features/saft_network.hpp"

@@ -20,8 +20,10 @@ void SaftExtractor::extract(const cv::Mat& gray, std::vector<cv::KeyPoint>& keyp
 
 DescriptorMetric SaftExtractor::metric() {
   DescriptorMetric m = DescriptorMetric::float_l2(SaftNetwork::kDimension);
-  m.strict = 0.7f;
-  m.loose = 1.0f;
+  // The distances that accept as many true matches as ORB's Hamming 50 / 100 on the
+  // patch-verification pairs of `saft eval` (docs/saft.md, saft_threshold_same_tpr).
+  m.strict = 0.77f;
+  m.loose = 1.08f;
   return m;
 }
 

@@ -20,8 +20,8 @@ class SaftExtractor {
   // Same keypoints as OrbExtractor::extract on the same image; descriptors N x kDimension.
   void extract(const cv::Mat& gray, std::vector<cv::KeyPoint>& keypoints, cv::Mat& descriptors);
 
-  // L2 on unit vectors with thresholds tuned on generated pairs (docs/saft.md): `strict` and
-  // `loose` accept the same fraction of true matches as ORB's Hamming 50 and 100 do.
+  // L2 on unit vectors; `strict` and `loose` accept the same fraction of true matches as
+  // ORB's Hamming 50 and 100 do on the `saft eval` pairs (docs/saft.md).
   static DescriptorMetric metric();
 
   OrbExtractor& orb() { return orb_; }

@@ -28,15 +28,6 @@ std::vector<torch::Tensor> stored_tensors(saft_detail::SaftNet& net) {
 
 }  // namespace
 
-struct SaftNetwork::Impl {
-  explicit Impl(unsigned seed) : net(nullptr) {
-    torch::manual_seed(seed);
-    net = saft_detail::SaftNet(SaftNetwork::kDimension);
-    net->eval();
-  }
-  saft_detail::SaftNet net;
-};
-
 SaftNetwork::SaftNetwork(SaftNetworkOptions options, unsigned seed) : options_(options) {
   if (options_.batch_size < 1) throw InputError("SAFT network: batch_size must be at least 1");
   if (options_.threads < 1) throw InputError("SAFT network: threads must be at least 1");

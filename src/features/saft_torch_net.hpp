@@ -3,6 +3,8 @@
 // torch): the libtorch module behind SaftNetwork.
 #include <torch/torch.h>
 
+#include "features/saft_network.hpp"
+
 namespace builtscene::saft_detail {
 
 // Layer table shared by the module and by SaftNetwork::multiply_adds_per_patch().
@@ -35,3 +37,16 @@ struct SaftNetImpl : torch::nn::Module {
 TORCH_MODULE(SaftNet);
 
 }  // namespace builtscene::saft_detail
+
+namespace builtscene {
+
+struct SaftNetwork::Impl {
+  explicit Impl(unsigned seed) : net(nullptr) {
+    torch::manual_seed(seed);
+    net = saft_detail::SaftNet(SaftNetwork::kDimension);
+    net->eval();
+  }
+  saft_detail::SaftNet net;
+};
+
+}  // namespace builtscene
