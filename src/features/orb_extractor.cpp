@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 #include <opencv2/features2d.hpp>
 #include <opencv2/imgproc.hpp>
@@ -237,6 +238,41 @@ void OrbExtractor::extract(const cv::Mat& gray_in, std::vector<cv::KeyPoint>& ke
     per_level_desc[l].copyTo(descriptors.rowRange(row, row + per_level_desc[l].rows));
     row += per_level_desc[l].rows;
     keypoints.insert(keypoints.end(), per_level[l].begin(), per_level[l].end());
+  }
+}
+
+int OrbExtractor::border() { return kBorder; }
+
+void OrbExtractor::describe(const cv::Mat& gray, std::vector<cv::KeyPoint>& keypoints, cv::Mat& descriptors) {
+  descriptors.create(static_cast<int>(keypoints.size()), 32, CV_8UC1);
+  if (keypoints.empty()) return;
+  CV_Assert(gray.type() == CV_8UC1);
+  build_pyramid(gray);
+  const auto L = static_cast<std::size_t>(options_.n_levels);
+  std::vector<std::vector<cv::KeyPoint>> per_level(L);
+  std::vector<std::vector<std::size_t>> index(L);
+  for (std::size_t i = 0; i < keypoints.size(); ++i) {
+    const cv::KeyPoint& k = keypoints[i];
+    if (k.octave < 0 || k.octave >= options_.n_levels) throw std::out_of_range("OrbExtractor::describe: octave out of range");
+    const auto l = static_cast<std::size_t>(k.octave);
+    const cv::Mat& img = levels_[l];
+    cv::KeyPoint at_level = k;
+    at_level.pt *= pyramid_.inv_scale[l];
+    // Rounded like describe_level does, so the check covers the pixels it will read.
+    const int x = cvRound(at_level.pt.x), y = cvRound(at_level.pt.y);
+    if (img.empty() || x < kBorder || y < kBorder || x >= img.cols - kBorder || y >= img.rows - kBorder)
+      throw std::out_of_range("OrbExtractor::describe: keypoint too close to the border of its level");
+    per_level[l].push_back(at_level);
+    index[l].push_back(i);
+  }
+  for (std::size_t l = 0; l < L; ++l) {
+    if (per_level[l].empty()) continue;
+    cv::Mat d;
+    describe_level(static_cast<int>(l), per_level[l], d);
+    for (std::size_t j = 0; j < index[l].size(); ++j) {
+      keypoints[index[l][j]] = per_level[l][j];
+      d.row(static_cast<int>(j)).copyTo(descriptors.row(static_cast<int>(index[l][j])));
+    }
   }
 }
 

@@ -48,6 +48,15 @@ class OrbExtractor {
   // per keypoint. An image too small for the pyramid gives no keypoints.
   void extract(const cv::Mat& gray, std::vector<cv::KeyPoint>& keypoints, cv::Mat& descriptors);
 
+  // Orientation and descriptor at given keypoints instead of detected ones (for positions
+  // mapped from another image by a known homography): `pt` in level-0 pixels, `octave` the
+  // level. Sets angle and size; rows follow the input order. Builds the pyramid of `gray`
+  // like extract(). Every keypoint must lie at least border() pixels inside its level
+  // (std::out_of_range otherwise).
+  void describe(const cv::Mat& gray, std::vector<cv::KeyPoint>& keypoints, cv::Mat& descriptors);
+  // Smallest distance, in pixels of its level, between a described keypoint and the border.
+  static int border();
+
   const OrbExtractorOptions& options() const { return options_; }
   const ScalePyramid& pyramid() const { return pyramid_; }
   // The image pyramid of the last extract() call (level 0 = the input).

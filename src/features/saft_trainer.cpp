@@ -1,0 +1,119 @@
+#include "features/saft_trainer.hpp"
+
+#include <cstring>
+#include <random>
+
+#include "core/errors.hpp"
+#include "features/saft_patch.hpp"
+#include "features/saft_torch_net.hpp"
+
+namespace builtscene {
+
+SaftLoss parse_saft_loss(const std::string& name) {
+  if (name == "hinge") return SaftLoss::kHinge;
+  if (name == "triplet") return SaftLoss::kTriplet;
+  throw InputError("--loss: '" + name + "' is not one of hinge, triplet");
+}
+
+std::string to_string(SaftLoss loss) { return loss == SaftLoss::kHinge ? "hinge" : "triplet"; }
+
+namespace {
+
+torch::Tensor to_tensor(const cv::Mat& normalized_patches) {
+  return torch::from_blob(const_cast<float*>(normalized_patches.ptr<float>()),
+                          {normalized_patches.rows, 1, kSaftPatchSize, kSaftPatchSize}, torch::kFloat32)
+      .clone();
+}
+
+cv::Mat gather(const cv::Mat& rows, const std::vector<int>& index) {
+  cv::Mat out(static_cast<int>(index.size()), rows.cols, rows.type());
+  for (std::size_t i = 0; i < index.size(); ++i) rows.row(index[i]).copyTo(out.row(static_cast<int>(i)));
+  return out;
+}
+
+bool same_point(const SaftPairPool& pool, int i, int j) {
+  const auto ui = static_cast<std::size_t>(i), uj = static_cast<std::size_t>(j);
+  if (pool.source[ui] != pool.source[uj]) return false;
+  const cv::Point2f d = pool.position[ui] - pool.position[uj];
+  return d.dot(d) < 12.0f * 12.0f;
+}
+
+}  // namespace
+
+SaftTrainingStep SaftTrainer::train(SaftNetwork& network, const SaftPairPool& pool, const SaftTrainerOptions& o,
+                                    const std::function<void(const SaftTrainingStep&)>& on_step) {
+  if (pool.size() < 2 * o.batch_pairs) throw InputError("saft train: only " + std::to_string(pool.size()) + " pairs, need at least " +
+                                                        std::to_string(2 * o.batch_pairs) + " (more images or keypoints)");
+  if (o.steps < 1 || o.batch_pairs < 2) throw InputError("saft train: steps must be >= 1 and batch pairs >= 2");
+  torch::set_num_threads(o.threads);
+  torch::manual_seed(o.seed);
+  std::mt19937_64 rng(o.seed);
+  auto& net = network.impl_->net;
+  net->train();
+  // The hinge loss's decision o = w * (b - d^2): a two-parameter "decision network" on the
+  // distance that matching will use.
+  torch::Tensor w = torch::full({1}, 2.0, torch::requires_grad());
+  torch::Tensor b = torch::full({1}, 1.0, torch::requires_grad());
+  std::vector<torch::Tensor> params = net->parameters();
+  params.push_back(w);
+  params.push_back(b);
+  torch::optim::Adam opt(params, torch::optim::AdamOptions(o.learning_rate).weight_decay(o.weight_decay));
+
+  const int B = o.batch_pairs;
+  std::uniform_int_distribution<int> pick(0, pool.size() - 1);
+  SaftTrainingStep last;
+  double tail_loss = 0.0, tail_acc = 0.0;
+  int tail_n = 0;
+  for (int step = 1; step <= o.steps; ++step) {
+    if (step == o.steps * 3 / 4 + 1)
+      for (auto& g : opt.param_groups()) static_cast<torch::optim::AdamOptions&>(g.options()).lr(o.learning_rate * 0.1);
+    // B distinct keypoints: in-batch negatives must never pair a point with itself.
+    std::vector<int> index;
+    while (static_cast<int>(index.size()) < B) {
+      const int i = pick(rng);
+      bool clash = false;
+      for (int j : index) clash = clash || same_point(pool, i, j);
+      if (!clash) index.push_back(i);
+    }
+    const torch::Tensor x = torch::cat({to_tensor(normalize_saft_patches(gather(pool.first, index))),
+                                        to_tensor(normalize_saft_patches(gather(pool.second, index)))});
+    const torch::Tensor d = torch::nn::functional::normalize(net->forward(x), torch::nn::functional::NormalizeFuncOptions().dim(1));
+    const torch::Tensor a = d.narrow(0, 0, B), p = d.narrow(0, B, B);
+    torch::Tensor loss, correct;
+    if (o.loss == SaftLoss::kHinge) {
+      // Matching pairs (a_i, p_i) with label +1, non-matching (a_i, p_{i+1}) with label -1.
+      const torch::Tensor d2_pos = (a - p).pow(2).sum(1);
+      const torch::Tensor d2_neg = (a - p.roll(1, 0)).pow(2).sum(1);
+      const torch::Tensor o_pos = w * (b - d2_pos), o_neg = w * (b - d2_neg);
+      loss = torch::cat({torch::relu(1 - o_pos), torch::relu(1 + o_neg)}).mean();
+      correct = torch::cat({o_pos > 0, o_neg < 0}).to(torch::kFloat32).mean();
+    } else {
+      // Hardest in batch (HardNet): the closest non-matching descriptor in the anchor's row
+      // or the positive's column.
+      const torch::Tensor dist = torch::cdist(a, p);
+      const torch::Tensor pos = dist.diagonal();
+      const torch::Tensor masked = dist + torch::eye(B) * 10.0;
+      const torch::Tensor hardest = torch::min(std::get<0>(masked.min(1)), std::get<0>(masked.min(0)));
+      loss = torch::relu(o.triplet_margin + pos - hardest).mean();
+      correct = (pos < hardest).to(torch::kFloat32).mean();
+    }
+    opt.zero_grad();
+    loss.backward();
+    opt.step();
+    last.step = step;
+    last.loss = loss.item<double>();
+    last.accuracy = correct.item<double>();
+    if (step > o.steps - std::max(1, o.steps / 10)) {
+      tail_loss += last.loss;
+      tail_acc += last.accuracy;
+      ++tail_n;
+    }
+    if (on_step) on_step(last);
+  }
+  net->eval();
+  last.loss = tail_loss / tail_n;
+  last.accuracy = tail_acc / tail_n;
+  return last;
+}
+
+}  // namespace builtscene
