@@ -36,15 +36,23 @@ void save_map_server(const OccupancyGrid& grid, const std::filesystem::path& yam
   if (!y) throw Failure(located(yaml_path, 0, "cannot write map YAML"));
 }
 
-OccupancyGrid load_map_server(const std::filesystem::path& yaml_path) {
-  YAML::Node root;
+namespace {
+
+// The map's YAML, or an InputError naming the file (and the line of a syntax error).
+YAML::Node load_map_yaml(const std::filesystem::path& yaml_path) {
   try {
-    root = YAML::LoadFile(yaml_path.string());
+    return YAML::LoadFile(yaml_path.string());
   } catch (const YAML::BadFile&) {
     throw_input_error(yaml_path, 0, "cannot open map YAML");
   } catch (const YAML::Exception& e) {
     throw_input_error(yaml_path, static_cast<std::size_t>(e.mark.line + 1), "invalid YAML: " + e.msg);
   }
+}
+
+}  // namespace
+
+OccupancyGrid load_map_server(const std::filesystem::path& yaml_path) {
+  const YAML::Node root = load_map_yaml(yaml_path);
   if (!root.IsMap()) throw_input_error(yaml_path, 0, "expected a map_server YAML map");
   auto field = [&](const char* key) {
     YAML::Node n = root[key];
@@ -107,14 +115,7 @@ void append_ground_frame(const std::filesystem::path& yaml_path, const SE3& T_gw
 }
 
 std::optional<SE3> read_ground_frame(const std::filesystem::path& yaml_path) {
-  YAML::Node root;
-  try {
-    root = YAML::LoadFile(yaml_path.string());
-  } catch (const YAML::BadFile&) {
-    throw_input_error(yaml_path, 0, "cannot open map YAML");
-  } catch (const YAML::Exception& e) {
-    throw_input_error(yaml_path, static_cast<std::size_t>(e.mark.line + 1), "invalid YAML: " + e.msg);
-  }
+  const YAML::Node root = load_map_yaml(yaml_path);
   const YAML::Node n = root["ground_frame_T_gw"];
   if (!n.IsDefined()) return std::nullopt;
   std::vector<double> v;
