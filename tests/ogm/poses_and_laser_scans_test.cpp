@@ -55,7 +55,9 @@ TEST(PosesAndLaserScans, OnePerKeyframeAndAllEveryNthWithCulledOnesDropped) {
     std::reverse(kfs.begin(), kfs.end());    // the SLAM lists keyframes in no particular order
     for (const auto& b : e.add_keyframe(i, level_camera_at(0.1 * i, 0), wall_depth(2.0), kfs)) {
       sizes.push_back(b.pairs.size());
-      if (b.full) EXPECT_TRUE(std::is_sorted(b.stamps.begin(), b.stamps.end()));
+      if (b.full) {
+        EXPECT_TRUE(std::is_sorted(b.stamps.begin(), b.stamps.end()));
+      }
     }
   }
   // keyframes 0,1,2 | full of 3 | 3,4,5 | full of 5 (1 culled) | 6
