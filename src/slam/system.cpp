@@ -66,8 +66,10 @@ TrackingOutcome System::track_rgbd(const cv::Mat& image, const cv::Mat& depth_m,
   if (database_ && out.new_keyframe) {
     // The new keyframe is the reference of the frame just recorded. Its bag of words costs
     // ~0.2 ms (one tree descent per descriptor), cheap enough for the tracking thread.
+    const auto t_bow = std::chrono::steady_clock::now();
     std::lock_guard lock(map_.mutex());
     if (const auto& kf = tracker_->records().back().reference) database_->add(kf);
+    timer_.add("keyframe_bow", ms_since(t_bow));
   }
   if (!options_.mapping_thread) mapping_->run_pending();
   timer_.add("tracking", ms_since(t0));

@@ -56,7 +56,10 @@ TrackingOutcome Tracker::track(Frame frame) {
       if (!ok) ok = track_reference_keyframe();
     } else if (relocalizer_) {
       // Lost: look for the place in the whole map.
-      if (auto kf = relocalizer_->relocalize(current_)) {
+      const auto start = std::chrono::steady_clock::now();
+      auto kf = relocalizer_->relocalize(current_);
+      if (timer_) timer_->add("relocalization", ms_since(start));
+      if (kf) {
         ok = true;
         relocalized = true;
         reference_ = kf;
