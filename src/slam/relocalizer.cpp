@@ -1,5 +1,8 @@
 #include "slam/relocalizer.hpp"
 
+#include <algorithm>
+#include <unordered_set>
+
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core/eigen.hpp>
 
@@ -46,13 +49,12 @@ int Relocalizer::search_local_map(Frame& frame, const KeyFrame& candidate, float
     if (p) already.push_back(p.get());
   std::sort(already.begin(), already.end());
   std::vector<ProjectedPoint> candidates;
-  std::vector<const MapPoint*> seen;
+  std::unordered_set<const MapPoint*> seen;
   for (KeyFrame* kf : kfs) {
     if (kf->bad) continue;
     for (const auto& p : kf->points) {
       if (!p || p->bad || std::binary_search(already.begin(), already.end(), p.get())) continue;
-      if (std::find(seen.begin(), seen.end(), p.get()) != seen.end()) continue;
-      seen.push_back(p.get());
+      if (!seen.insert(p.get()).second) continue;
       const Eigen::Vector3d pc = frame.T_cw * p->position;
       if (pc.z() <= 0) continue;
       const double inv_z = 1.0 / pc.z();
