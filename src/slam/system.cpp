@@ -64,8 +64,9 @@ TrackingOutcome System::track_rgbd(const cv::Mat& image, const cv::Mat& depth_m,
   TrackingOutcome out = tracker_->track(std::move(frame));
   out.keypoints = keypoints;
   if (database_ && out.new_keyframe) {
-    // The new keyframe is the reference of the frame just recorded. Its bag of words costs
-    // ~0.2 ms (one tree descent per descriptor), cheap enough for the tracking thread.
+    // The new keyframe is the reference of the frame just recorded. Its bag of words (one
+    // tree descent per descriptor) measured 1.2 ms median at load 16, once per keyframe:
+    // cheap enough for the tracking thread.
     const auto t_bow = std::chrono::steady_clock::now();
     std::lock_guard lock(map_.mutex());
     if (const auto& kf = tracker_->records().back().reference) database_->add(kf);
