@@ -16,6 +16,7 @@ struct TrajectoryPairOptions {
   double max_diff = 0.02;
   std::size_t delta = 1;
   bool scale = false;
+  std::string aligned_out;
 };
 
 void add_pair_options(CLI::App& cmd, TrajectoryPairOptions& o) {
@@ -41,6 +42,14 @@ nlohmann::json run_ate(const TrajectoryPairOptions& o) {
   j["transform"] = {{"t", {t.x(), t.y(), t.z()}}, {"q_xyzw", {q.x(), q.y(), q.z(), q.w()}}, {"scale", r.est_to_gt.scale()}};
   j["gt_poses"] = gt.size();
   j["est_poses"] = est.size();
+  if (!o.aligned_out.empty()) {
+    // Every estimated pose (not only the paired ones) in the ground truth's frame, so maps
+    // built from the estimate overlay the ground truth's maps.
+    Trajectory aligned;
+    for (const auto& p : est) aligned.push_back({p.timestamp, r.est_to_gt.transform_pose(p.pose)});
+    write_tum_trajectory(o.aligned_out, aligned);
+    j["aligned_out"] = o.aligned_out;
+  }
   return j;
 }
 
@@ -86,6 +95,7 @@ const bool ate = register_command({
       auto o = std::make_shared<TrajectoryPairOptions>();
       add_pair_options(cmd, *o);
       cmd.add_option("--align", o->align, "Alignment of the estimate: se3, sim3 or none")->capture_default_str();
+      cmd.add_option("--aligned-out", o->aligned_out, "Output: the estimate transformed into the ground truth's frame (TUM)");
       return [o] { return run_ate(*o); };
     },
     .order = 60});

@@ -36,6 +36,7 @@ nlohmann::json run_build(BuildOptions o) {
   const OccupancyGrid grid = r.mapper.grid();
   const auto yaml = yaml_path(o.out);
   save_map_server(grid, yaml);
+  append_ground_frame(yaml, r.frame.T_gw());
   auto state = yaml;
   state.replace_extension(".state");
   r.mapper.save_state(state);

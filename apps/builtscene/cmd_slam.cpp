@@ -13,6 +13,7 @@
 #include "io/trajectory.hpp"
 #include "io/tum_dataset.hpp"
 #include "slam/system.hpp"
+#include "slam_ogm_output.hpp"
 
 namespace builtscene::app {
 namespace {
@@ -26,6 +27,7 @@ struct SlamOptions {
   bool sync_mapping = false;
   std::filesystem::path vocabulary;
   bool no_relocalization = false;
+  SlamOgmOptions ogm;
 };
 
 nlohmann::json run_slam(const SlamOptions& opt) {
@@ -43,6 +45,8 @@ nlohmann::json run_slam(const SlamOptions& opt) {
     if (!probe) throw InputError(located(out, 0, "cannot write output file"));
   }
 
+  std::optional<SlamOgmOutput> ogm;
+  if (opt.ogm.enabled()) ogm.emplace(opt.ogm, data.settings().camera);
   slam::System system(data.settings(), so);
   const std::size_t n = opt.max_frames > 0 ? std::min<std::size_t>(data.size(), static_cast<std::size_t>(opt.max_frames))
                                            : data.size();
@@ -76,6 +80,7 @@ nlohmann::json run_slam(const SlamOptions& opt) {
     }
     last_timestamp = e.timestamp;
     const auto out = system.track_rgbd(rgb, depth, e.timestamp);
+    if (ogm) ogm->after_frame(system, out, e.timestamp, depth);
     if (out.keypoints < 20) ++no_features;
     if (out.state == slam::TrackingState::kOk) {
       ++tracked;
@@ -99,6 +104,7 @@ nlohmann::json run_slam(const SlamOptions& opt) {
   write_tum_trajectory(opt.trajectory, traj);
   if (!opt.keyframes.empty()) write_tum_trajectory(opt.keyframes, system.keyframe_trajectory());
 
+  const nlohmann::json ogm_summary = ogm ? ogm->finish(system) : nlohmann::json();
   const auto stats = system.mapping_stats();
   const auto relocalized = system.relocalized_frames();
   const long processed = static_cast<long>(n) - out_of_order - unreadable_rgb;
@@ -135,6 +141,7 @@ nlohmann::json run_slam(const SlamOptions& opt) {
       {"trajectory", opt.trajectory.string()},
       {"trajectory_poses", traj.size()},
   };
+  if (ogm) j["ogm"] = ogm_summary;
   spdlog::info("slam: {} frames, {} tracked, {} lost, {} keyframes, {} map points, {:.1f} fps", n, tracked,
                lost + not_initialized, system.keyframe_count(), system.map_point_count(), j["fps"].get<double>());
   return j;
@@ -156,6 +163,19 @@ const bool registered = register_command({
                      "Bag-of-words vocabulary for relocalization (default: the shipped data/vocab/orb_k10_L4.bsvoc)");
       cmd.add_flag("--no-relocalization", opt->no_relocalization,
                    "When lost, only match the last reference keyframe (no place recognition)");
+      cmd.add_option("--ogm-out", opt->ogm.out,
+                     "Output: occupancy grid built live from keyframes (MAP.yaml, .pgm, .state, .png)");
+      cmd.add_option("--ogm-world", opt->ogm.world,
+                     "Ground plane of the grid: auto (floor in the first keyframe's depth) or camera (first camera level)")
+          ->capture_default_str();
+      cmd.add_option("--camera-height", opt->ogm.camera_height, "With --ogm-world camera: first camera above the floor, m")
+          ->capture_default_str();
+      cmd.add_option("--ogm-every", opt->ogm.batches.full_batch_every,
+                     "Rebuild the grid from all keyframes every N keyframes (0 = only after loops and at the end)")
+          ->capture_default_str()
+          ->check(CLI::NonNegativeNumber);
+      cmd.add_option("--lcm", opt->ogm.lcm_url,
+                     "Publish PosesAndLaserScans on POSES_AND_LASER_SCANS over this LCM URL (udpm://..., file://LOG?mode=w)");
       return [opt] { return run_slam(*opt); };
     },
     .order = 40});

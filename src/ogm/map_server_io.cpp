@@ -94,3 +94,41 @@ OccupancyGrid load_map_server(const std::filesystem::path& yaml_path) {
 }
 
 }  // namespace builtscene
+
+namespace builtscene {
+
+void append_ground_frame(const std::filesystem::path& yaml_path, const SE3& T_gw) {
+  std::ofstream y(yaml_path, std::ios::app);
+  const auto& t = T_gw.translation();
+  const auto& q = T_gw.rotation();
+  y << std::setprecision(17) << "ground_frame_T_gw: [" << t.x() << ", " << t.y() << ", " << t.z() << ", " << q.x()
+    << ", " << q.y() << ", " << q.z() << ", " << q.w() << "]\n";
+  if (!y) throw Failure(located(yaml_path, 0, "cannot write map YAML"));
+}
+
+std::optional<SE3> read_ground_frame(const std::filesystem::path& yaml_path) {
+  YAML::Node root;
+  try {
+    root = YAML::LoadFile(yaml_path.string());
+  } catch (const YAML::BadFile&) {
+    throw_input_error(yaml_path, 0, "cannot open map YAML");
+  } catch (const YAML::Exception& e) {
+    throw_input_error(yaml_path, static_cast<std::size_t>(e.mark.line + 1), "invalid YAML: " + e.msg);
+  }
+  const YAML::Node n = root["ground_frame_T_gw"];
+  if (!n.IsDefined()) return std::nullopt;
+  std::vector<double> v;
+  try {
+    v = n.as<std::vector<double>>();
+  } catch (const YAML::Exception&) {
+    throw_input_error(yaml_path, static_cast<std::size_t>(n.Mark().line + 1), "field 'ground_frame_T_gw' must be 7 numbers");
+  }
+  Eigen::Quaterniond q(v.size() == 7 ? v[6] : 0, v.size() == 7 ? v[3] : 0, v.size() == 7 ? v[4] : 0, v.size() == 7 ? v[5] : 0);
+  if (v.size() != 7 || !std::isfinite(q.norm()) || std::abs(q.norm() - 1.0) > 1e-6 ||
+      !std::isfinite(v[0] + v[1] + v[2]))
+    throw_input_error(yaml_path, static_cast<std::size_t>(n.Mark().line + 1),
+                      "field 'ground_frame_T_gw' must be tx ty tz qx qy qz qw with a unit quaternion");
+  return SE3(q, Eigen::Vector3d(v[0], v[1], v[2]));
+}
+
+}  // namespace builtscene

@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
 #include <cmath>
 #include <random>
 
@@ -161,6 +163,41 @@ TEST(AteCli, MatchesIndependentNumpyReferenceOnRealGroundTruth) {
       EXPECT_NEAR(a["scale"].get<double>(), b["scale"].get<double>(), 1e-6);
     }
   }
+}
+
+}  // namespace
+}  // namespace builtscene
+
+namespace builtscene {
+namespace {
+
+// --aligned-out: a noise-free estimate that is a rigid motion of the ground truth comes back
+// onto the ground truth, pose for pose (rotation and position).
+TEST(AteCli, AlignedOutputLandsOnTheGroundTruth) {
+  Trajectory gt;
+  for (int i = 0; i < 50; ++i) {
+    const double a = 0.1 * i;
+    gt.push_back({0.1 * i, SE3(Eigen::Quaterniond(Eigen::AngleAxisd(a, Eigen::Vector3d::UnitZ())),
+                               Eigen::Vector3d(std::cos(a), std::sin(2 * a), 0.1 * a))});
+  }
+  const Sim3 T(Eigen::Quaterniond(Eigen::AngleAxisd(1.1, Eigen::Vector3d(1, 2, 3).normalized())),
+               Eigen::Vector3d(4, -2, 1), 1.0);
+  const std::vector<Eigen::Vector3d> no_noise(gt.size(), Eigen::Vector3d::Zero());
+  const auto dir = fs::temp_directory_path() / ("bs_ate_aligned_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  write_tum_trajectory(dir / "gt.txt", gt);
+  write_tum_trajectory(dir / "est.txt", make_estimate(gt, T, no_noise));
+  const auto r = testing::run_cli("eval ate --json --gt " + testing::shell_quote(dir / "gt.txt") + " --est " +
+                                  testing::shell_quote(dir / "est.txt") + " --aligned-out " +
+                                  testing::shell_quote(dir / "aligned.txt"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const Trajectory aligned = read_tum_trajectory(dir / "aligned.txt");
+  ASSERT_EQ(aligned.size(), gt.size());
+  for (std::size_t i = 0; i < gt.size(); ++i) {
+    EXPECT_LT((aligned[i].pose.translation() - gt[i].pose.translation()).norm(), 1e-5) << i;
+    EXPECT_LT(aligned[i].pose.rotation().angularDistance(gt[i].pose.rotation()), 1e-5) << i;
+  }
+  fs::remove_all(dir);
 }
 
 }  // namespace

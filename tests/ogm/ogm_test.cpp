@@ -193,6 +193,31 @@ TEST(MapServerIo, RoundTripKeepsClassesAndFlipsRows) {
   EXPECT_EQ(r.at({10, 5}), -1);
 }
 
+TEST(MapServerIo, GroundFrameRidesInTheYamlAndStillLoads) {
+  OccupancyGrid g(10, 10, 0.05, {0.0, 0.0}, 0);
+  const auto d = temp_dir("ground");
+  save_map_server(g, d / "map.yaml");
+  EXPECT_FALSE(read_ground_frame(d / "map.yaml").has_value());
+  const SE3 T(Eigen::Quaterniond(Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, -2, 0.5).normalized())),
+              Eigen::Vector3d(0.25, -3.5, 1.125));
+  append_ground_frame(d / "map.yaml", T);
+  EXPECT_EQ(load_map_server(d / "map.yaml").width(), 10);  // map_server's keys untouched
+  const auto back = read_ground_frame(d / "map.yaml");
+  ASSERT_TRUE(back.has_value());
+  EXPECT_LT((back->translation() - T.translation()).norm(), 1e-12);
+  EXPECT_LT(back->rotation().angularDistance(T.rotation()), 1e-12);
+  std::ofstream(d / "short.yaml") << "image: map.pgm\nground_frame_T_gw: [1, 2, 3]\n";
+  EXPECT_THROW(read_ground_frame(d / "short.yaml"), InputError);
+  std::ofstream(d / "bad.yaml") << "image: map.pgm\nground_frame_T_gw: [0, 0, 0, 0, 0, 0, 2]\n";
+  try {
+    read_ground_frame(d / "bad.yaml");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("ground_frame_T_gw"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("bad.yaml"), std::string::npos) << e.what();
+  }
+}
+
 TEST(MapServerIo, BadYamlNamesFileAndField) {
   const auto d = temp_dir("bad");
   std::ofstream(d / "a.yaml") << "image: missing.pgm\nresolution: 0.05\norigin: [0, 0, 0]\noccupied_thresh: 0.65\nfree_thresh: 0.2\n";

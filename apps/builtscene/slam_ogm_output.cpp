@@ -1,0 +1,103 @@
+#include "slam_ogm_output.hpp"
+
+#include <chrono>
+#include <fstream>
+
+#include <opencv2/imgcodecs.hpp>
+
+#include "core/errors.hpp"
+#include "core/logging.hpp"
+#include "core/stage_timer.hpp"
+#include "ogm/map_drawing.hpp"
+#include "ogm/map_server_io.hpp"
+
+namespace builtscene::app {
+
+SlamOgmOutput::SlamOgmOutput(SlamOgmOptions options, const PinholeCamera& camera)
+    : options_(std::move(options)), camera_(camera) {
+  if (options_.world != "auto" && options_.world != "camera")
+    throw InputError("--ogm-world: unknown value '" + options_.world + "' (expected auto or camera)");
+  if (!options_.lcm_url.empty()) lcm_ = std::make_unique<LcmPublisher>(options_.lcm_url);
+  if (!options_.out.empty()) {
+    // Fail on an unwritable map before spending minutes on the sequence.
+    const auto probe = std::filesystem::path(options_.out.string() + ".yaml");
+    std::ofstream f(probe, std::ios::app);
+    if (!f) throw InputError(located(probe, 0, "cannot write the occupancy grid"));
+  }
+}
+
+void SlamOgmOutput::consume(const PosesAndLaserScans& batch) {
+  if (batch.pairs.empty()) return;
+  mapper_.integrate_batch(batch.pairs);
+  if (lcm_) lcm_->publish(batch);
+  ++batches_;
+  if (batch.full) {
+    ++full_batches_;
+    keyframe_poses_.clear();
+    for (const auto& p : batch.pairs) keyframe_poses_.push_back(p.pose);
+  } else {
+    keyframe_poses_.push_back(batch.pairs.front().pose);
+  }
+}
+
+void SlamOgmOutput::after_frame(slam::System& system, const slam::TrackingOutcome& outcome, double timestamp,
+                                const cv::Mat& depth) {
+  if (!outcome.new_keyframe) return;
+  const auto start = std::chrono::steady_clock::now();
+  const Trajectory keyframes = system.keyframe_trajectory();
+  const StampedPose* kf = nullptr;
+  for (const auto& k : keyframes)
+    if (k.timestamp == timestamp) kf = &k;
+  if (!kf || depth.empty()) return;  // culled at once, or a frame without depth: no scan
+  if (!emitter_) {
+    GroundFrame ground = GroundFrame::first_camera(options_.camera_height);
+    if (options_.world == "auto") {
+      try {
+        ground = GroundFrame::estimate({kf->pose}, {depth}, camera_);
+      } catch (const InputError& e) {
+        spdlog::warn("occupancy grid: {}; using the first camera {} m above a level floor", e.what(),
+                     options_.camera_height);
+      }
+    }
+    emitter_.emplace(camera_, ground, options_.batches);
+  }
+  for (const auto& batch : emitter_->add_keyframe(timestamp, kf->pose, depth, keyframes)) consume(batch);
+  system.timer().add("ogm", ms_since(start));
+}
+
+nlohmann::json SlamOgmOutput::finish(slam::System& system) {
+  nlohmann::json j = {{"batches", batches_}, {"full_batches", full_batches_}};
+  if (!emitter_) {
+    spdlog::warn("occupancy grid: no keyframe with depth; no map written");
+    j["map"] = nullptr;
+    return j;
+  }
+  // The keyframes' final poses (after the last local BA / loop closure) rebuild the map.
+  consume(emitter_->full_batch(system.keyframe_trajectory()));
+  j["batches"] = batches_;
+  j["full_batches"] = full_batches_;
+  j["scans"] = mapper_.scans_integrated();
+  if (options_.out.empty()) return j;
+  const OccupancyGrid grid = mapper_.grid();
+  const std::filesystem::path yaml = options_.out.string() + ".yaml";
+  const std::filesystem::path state = options_.out.string() + ".state";
+  const std::filesystem::path png = options_.out.string() + ".png";
+  save_map_server(grid, yaml);
+  append_ground_frame(yaml, emitter_->ground().T_gw());  // so `localize --ogm` can put poses on it
+  mapper_.save_state(state);
+  MapDrawing d(grid, 2);
+  d.trajectory(keyframe_poses_);
+  if (!keyframe_poses_.empty()) d.robot(keyframe_poses_.back());
+  if (!cv::imwrite(png.string(), d.image())) throw Failure(located(png, 0, "cannot write picture"));
+  const auto& T = emitter_->ground().T_gw();
+  j["map"] = yaml.string();
+  j["state"] = state.string();
+  j["png"] = png.string();
+  j["width"] = grid.width();
+  j["height"] = grid.height();
+  j["T_gw"] = {T.translation().x(), T.translation().y(), T.translation().z(), T.rotation().x(), T.rotation().y(),
+               T.rotation().z(), T.rotation().w()};
+  return j;
+}
+
+}  // namespace builtscene::app

@@ -1,0 +1,52 @@
+#pragma once
+// `slam --ogm-out`: the occupancy grid built live beside the feature map (the source's
+// OGM-enhanced SLAM). For every new keyframe the SLAM's PosesAndLaserScans batch of one updates
+// the grid; every N keyframes, after every loop closure and at the end, the batch of all
+// keyframes with their optimized poses rebuilds it. Batches also go out over LCM (--lcm URL).
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
+
+#include "ogm/lcm_publisher.hpp"
+#include "ogm/occupancy_grid_mapper.hpp"
+#include "ogm/poses_and_laser_scans.hpp"
+#include "slam/system.hpp"
+
+namespace builtscene::app {
+
+struct SlamOgmOptions {
+  std::filesystem::path out;       // MAP: writes MAP.yaml, MAP.pgm, MAP.state, MAP.png
+  std::string world = "auto";      // auto: floor found in the first keyframe's depth; camera: first camera level
+  double camera_height = 1.0;      // world = camera: first camera above the floor, m
+  PosesAndLaserScansOptions batches;
+  std::string lcm_url;             // empty: no LCM
+  bool enabled() const { return !out.empty() || !lcm_url.empty(); }
+};
+
+class SlamOgmOutput {
+ public:
+  SlamOgmOutput(SlamOgmOptions options, const PinholeCamera& camera);
+
+  // After each tracked frame. `depth` is the frame's depth (CV_32F metres).
+  void after_frame(slam::System& system, const slam::TrackingOutcome& outcome, double timestamp,
+                   const cv::Mat& depth);
+  // After the SLAM has shut down: the final rebuild, then the files. JSON summary.
+  nlohmann::json finish(slam::System& system);
+
+ private:
+  SlamOgmOptions options_;
+  PinholeCamera camera_;
+  std::optional<PosesAndLaserScansEmitter> emitter_;
+  OccupancyGridMapper mapper_;
+  std::unique_ptr<LcmPublisher> lcm_;
+  std::vector<Pose2D> keyframe_poses_;
+  long batches_ = 0, full_batches_ = 0;
+
+  void consume(const PosesAndLaserScans& batch);
+};
+
+}  // namespace builtscene::app

@@ -1,0 +1,39 @@
+#pragma once
+// Publishes the locating system's live messages over LCM (types in src/ogm/lcm/ogm_messages.lcm):
+// PosesAndLaserScans batches on POSES_AND_LASER_SCANS and points-of-interest events on
+// POI_EVENTS. Any LCM URL works: udpm:// for other processes and hosts, file://LOG?mode=w to
+// record to an LCM log.
+#include <memory>
+#include <string>
+
+#include "ogm/poses_and_laser_scans.hpp"
+
+namespace builtscene {
+
+struct LcmPoiEvent {
+  double time = 0;
+  long frame = 0;
+  Pose2D pose;
+  std::string poi;
+  double distance = 0;
+};
+
+class LcmPublisher {
+ public:
+  // InputError naming the URL when LCM cannot open it.
+  explicit LcmPublisher(const std::string& url);
+  ~LcmPublisher();
+  LcmPublisher(const LcmPublisher&) = delete;
+  LcmPublisher& operator=(const LcmPublisher&) = delete;
+
+  void publish(const PosesAndLaserScans& batch, const std::string& channel = "POSES_AND_LASER_SCANS");
+  void publish(const LcmPoiEvent& event, const std::string& channel = "POI_EVENTS");
+  long published() const { return published_; }
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+  long published_ = 0;
+};
+
+}  // namespace builtscene
