@@ -25,6 +25,8 @@ struct SlamOptions {
   std::filesystem::path keyframes;
   long max_frames = 0;
   bool sync_mapping = false;
+  std::filesystem::path vocabulary;
+  bool no_relocalization = false;
   SlamOgmOptions ogm;
 };
 
@@ -34,6 +36,8 @@ nlohmann::json run_slam(const SlamOptions& opt) {
   slam::SystemOptions so;
   so.orb = OrbExtractorOptions::from_settings(SettingsFile::load(camera_file));
   so.mapping_thread = !opt.sync_mapping;
+  so.vocabulary = opt.vocabulary;
+  so.relocalization = !opt.no_relocalization;
   // Fail on an unwritable output before spending minutes on the sequence.
   for (const auto& out : {opt.trajectory, opt.keyframes}) {
     if (out.empty()) continue;
@@ -102,6 +106,7 @@ nlohmann::json run_slam(const SlamOptions& opt) {
 
   const nlohmann::json ogm_summary = ogm ? ogm->finish(system) : nlohmann::json();
   const auto stats = system.mapping_stats();
+  const auto relocalized = system.relocalized_frames();
   const long processed = static_cast<long>(n) - out_of_order - unreadable_rgb;
   const double frame_median = system.timer().median_ms("frame");
   nlohmann::json j = {
@@ -130,6 +135,8 @@ nlohmann::json run_slam(const SlamOptions& opt) {
         {"bundle_adjustments", stats.bundle_adjustments},
         {"bundle_adjustments_aborted", stats.bundle_adjustments_aborted},
         {"max_queue", stats.max_queue}}},
+      {"relocalizations", {{"count", relocalized.size()}, {"frames", relocalized}}},
+      {"vocabulary", system.vocabulary() ? so.vocabulary.empty() ? slam::default_vocabulary_path().string() : so.vocabulary.string() : ""},
       {"stage_ms", system.timer().summary()},
       {"trajectory", opt.trajectory.string()},
       {"trajectory_poses", traj.size()},
@@ -152,6 +159,10 @@ const bool registered = register_command({
       cmd.add_option("--max-frames", opt->max_frames, "Only the first N frames (0 = all)");
       cmd.add_flag("--sync-mapping", opt->sync_mapping,
                    "Run local mapping inline after each keyframe (deterministic, slower) instead of in its thread");
+      cmd.add_option("--vocabulary", opt->vocabulary,
+                     "Bag-of-words vocabulary for relocalization (default: the shipped data/vocab/orb_k10_L4.bsvoc)");
+      cmd.add_flag("--no-relocalization", opt->no_relocalization,
+                   "When lost, only match the last reference keyframe (no place recognition)");
       cmd.add_option("--ogm-out", opt->ogm.out,
                      "Output: occupancy grid built live from keyframes (MAP.yaml, .pgm, .state, .png)");
       cmd.add_option("--ogm-world", opt->ogm.world,

@@ -7,6 +7,7 @@
 //   for (...) slam.track_rgbd(bgr, depth_m, t);
 //   slam.shutdown();
 //   write_tum_trajectory("traj.txt", slam.trajectory());
+#include <filesystem>
 #include <memory>
 
 #include <opencv2/core.hpp>
@@ -19,6 +20,10 @@
 #include "slam/map.hpp"
 #include "slam/tracking.hpp"
 
+namespace builtscene {
+class BowVocabulary;
+}
+
 namespace builtscene::slam {
 
 struct SystemOptions {
@@ -26,7 +31,19 @@ struct SystemOptions {
   TrackingOptions tracking;
   LocalMappingOptions mapping;
   bool mapping_thread = true;  // false: local mapping runs inline after each keyframe (deterministic)
+  // Bag-of-words vocabulary for the keyframe database and relocalization. Empty: the
+  // shipped default (default_vocabulary_path()); when that is missing too, a lost frame
+  // is only matched against the last reference keyframe.
+  std::filesystem::path vocabulary;
+  bool relocalization = true;
 };
+
+// The shipped ORB vocabulary: the source tree's data/vocab/orb_k10_L4.bsvoc, else the
+// installed copy; empty when neither exists.
+std::filesystem::path default_vocabulary_path();
+
+class KeyFrameDatabase;
+class Relocalizer;
 
 class System {
  public:
@@ -53,6 +70,13 @@ class System {
   StageTimer& timer() { return timer_; }
   const FrameContext& context() const { return *ctx_; }
 
+  // Place recognition: null / empty without a vocabulary. The database is guarded by the
+  // map lock (see keyframe_database.hpp).
+  const KeyFrameDatabase* keyframe_database() const { return database_.get(); }
+  std::shared_ptr<const BowVocabulary> vocabulary() const { return vocabulary_; }
+  // Frame ids (0-based count of frames passed to track_rgbd) where relocalization succeeded.
+  std::vector<long> relocalized_frames() const { return tracker_->relocalized_frames(); }
+
  private:
   RgbdCameraSettings settings_;
   SystemOptions options_;
@@ -62,6 +86,9 @@ class System {
   Map map_;
   std::unique_ptr<LocalMapping> mapping_;
   std::unique_ptr<Tracker> tracker_;
+  std::shared_ptr<const BowVocabulary> vocabulary_;
+  std::unique_ptr<KeyFrameDatabase> database_;
+  std::unique_ptr<Relocalizer> relocalizer_;
   long next_frame_id_ = 0;
   bool shut_down_ = false;
 };

@@ -9,6 +9,7 @@
 #include "slam/map_point.hpp"
 #include "slam/matcher.hpp"
 #include "slam/pose_optimizer.hpp"
+#include "slam/relocalizer.hpp"
 
 namespace builtscene::slam {
 
@@ -39,6 +40,7 @@ TrackingOutcome Tracker::track(Frame frame) {
   TrackingOutcome out;
   std::unique_lock lock(map_.mutex());
   bool ok = false;
+  bool relocalized = false;
   if (state_ == TrackingState::kNotInitialized) {
     ok = initialize();
     out.state = state_;
@@ -52,9 +54,20 @@ TrackingOutcome Tracker::track(Frame frame) {
         out.used_motion_model = ok;
       }
       if (!ok) ok = track_reference_keyframe();
+    } else if (relocalizer_) {
+      // Lost: look for the place in the whole map.
+      const auto start = std::chrono::steady_clock::now();
+      auto kf = relocalizer_->relocalize(current_);
+      if (timer_) timer_->add("relocalization", ms_since(start));
+      if (kf) {
+        ok = true;
+        relocalized = true;
+        reference_ = kf;
+        relocalized_frames_.push_back(current_.id);
+      }
     } else {
-      // Lost: without relocalization (issue 5) the best chance is that the camera is still
-      // near the reference keyframe; try to match it each frame.
+      // Lost without a vocabulary: the best chance is that the camera is still near the
+      // reference keyframe; try to match it each frame.
       ok = track_reference_keyframe();
     }
     current_.reference = reference_;
@@ -68,7 +81,7 @@ TrackingOutcome Tracker::track(Frame frame) {
     out.inliers = ok ? inliers_ : 0;
     if (ok) {
       velocity_ = current_.T_cw * last_.T_cw.inverse();
-      has_velocity_ = true;
+      has_velocity_ = !relocalized;  // the last frame is from before the loss: no motion to extrapolate
       // Temporary (visual-odometry) matches do not count towards the map.
       for (auto& p : current_.points)
         if (p && p->observation_count() == 0) p = nullptr;

@@ -18,6 +18,7 @@ namespace builtscene::slam {
 class Map;
 class KeyFrame;
 class KeyFrameSink;
+class Relocalizer;
 
 struct TrackingOptions {
   int min_init_points = 500;       // keypoints with depth needed to start a map
@@ -71,6 +72,12 @@ class Tracker {
   const std::vector<FrameRecord>& records() const { return records_; }
   void reset();
 
+  // When set, a lost frame is relocalized against the whole map (BoW candidates, EPnP)
+  // instead of matched against the last reference keyframe only. Not owned.
+  void set_relocalizer(const Relocalizer* relocalizer) { relocalizer_ = relocalizer; }
+  // Ids of the frames where tracking resumed through relocalization.
+  const std::vector<long>& relocalized_frames() const { return relocalized_frames_; }
+
  private:
   std::shared_ptr<const FrameContext> ctx_;
   Map& map_;
@@ -89,6 +96,8 @@ class Tracker {
   long last_kf_frame_id_ = 0;
   int inliers_ = 0;
   std::vector<FrameRecord> records_;
+  const Relocalizer* relocalizer_ = nullptr;
+  std::vector<long> relocalized_frames_;
 
   bool initialize();
   void update_last_frame();
