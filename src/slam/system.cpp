@@ -1,9 +1,11 @@
 #include "slam/system.hpp"
 
 #include <chrono>
+#include <thread>
 
 #include <opencv2/imgproc.hpp>
 
+#include "core/errors.hpp"
 #include "slam/key_frame.hpp"
 
 namespace builtscene::slam {
@@ -34,10 +36,23 @@ TrackingOutcome System::track_rgbd(const cv::Mat& image, const cv::Mat& depth_m,
   timer_.add("extraction", ms_since(start));
   const auto t0 = std::chrono::steady_clock::now();
   const int keypoints = static_cast<int>(features->size());
-  Frame frame(next_frame_id_++, timestamp, std::move(features));
+  const long frame_id = next_frame_id_++;
+  Frame frame(frame_id, timestamp, std::move(features));
+  const TrackingState before = tracker_->state();
   TrackingOutcome out = tracker_->track(std::move(frame));
   out.keypoints = keypoints;
+  last_timestamp_ = timestamp;
+  if (before == TrackingState::kLost && out.state == TrackingState::kOk) {
+    ++relocalizations_;
+    if (first_relocalized_frame_ < 0) first_relocalized_frame_ = frame_id;
+  }
   if (!options_.mapping_thread) mapping_->run_pending();
+  // Frame records must not keep culled keyframes (and their features) alive.
+  const long culled = mapping_->stats().keyframes_culled;
+  if (culled != culled_seen_) {
+    culled_seen_ = culled;
+    tracker_->compact_records();
+  }
   timer_.add("tracking", ms_since(t0));
   timer_.add("frame", ms_since(start));
   return out;
@@ -50,25 +65,58 @@ void System::shutdown() {
   mapping_->finish();
 }
 
+SE3 System::record_pose(const Tracker::FrameRecord& r) const {
+  // Walk up the spanning tree past culled keyframes (their pose relative to the parent was
+  // frozen when they were culled).
+  SE3 chain;  // T_cr accumulated through culled keyframes
+  const KeyFrame* kf = r.reference.get();
+  while (kf->bad && kf->parent) {
+    chain = chain * kf->T_cp;
+    kf = kf->parent.get();
+  }
+  return r.T_cr * (chain * kf->pose());
+}
+
 Trajectory System::trajectory() const {
   std::lock_guard lock(map_.mutex());
   Trajectory out;
   for (const auto& r : tracker_->records()) {
     if (!r.tracked || !r.reference) continue;
-    // Walk up the spanning tree past culled keyframes (their pose relative to the parent was
-    // frozen when they were culled).
-    SE3 T_rw;
-    SE3 chain;  // T_cr accumulated through culled keyframes
-    const KeyFrame* kf = r.reference.get();
-    while (kf->bad && kf->parent) {
-      chain = chain * kf->T_cp;
-      kf = kf->parent.get();
-    }
-    T_rw = chain * kf->pose();
-    const SE3 T_cw = r.T_cr * T_rw;
-    out.push_back({r.timestamp, T_cw.inverse()});
+    out.push_back({r.timestamp, record_pose(r).inverse()});
   }
   return out;
+}
+
+std::optional<SE3> System::last_pose() const {
+  std::lock_guard lock(map_.mutex());
+  const auto& records = tracker_->records();
+  if (records.empty() || !records.back().tracked || !records.back().reference) return std::nullopt;
+  return record_pose(records.back()).inverse();
+}
+
+MapFileInfo System::load_map(const std::filesystem::path& path) {
+  if (next_frame_id_ != 0) throw Failure("load_map: a map can only be loaded before the first frame");
+  // The vocabulary checksum joins here once the keyframe database exists (issue 5, places).
+  MapFileInfo info = read_map_file(path, map_, ctx_);
+  tracker_->start_lost();
+  return info;
+}
+
+MapFileInfo System::save_map(const std::filesystem::path& path) {
+  mapping_->run_pending();
+  if (options_.mapping_thread && !shut_down_) {
+    // Let the mapping thread drain its queue so the saved map holds every keyframe complete.
+    while (mapping_->queue_size() > 0 || !mapping_->accepts_keyframes())
+      std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+  return write_map_file(path, map_, *ctx_, 0);
+}
+
+void System::set_mode(Mode mode, const std::string& reason) {
+  if (mode == mode_) return;
+  mode_switches_.push_back({next_frame_id_, last_timestamp_, mode_, mode, reason});
+  mode_ = mode;
+  tracker_->set_keyframe_creation(mode == Mode::kSlam);
 }
 
 Trajectory System::keyframe_trajectory() const {

@@ -40,12 +40,13 @@ TrackingOutcome Tracker::track(Frame frame) {
   std::unique_lock lock(map_.mutex());
   bool ok = false;
   if (state_ == TrackingState::kNotInitialized) {
-    ok = initialize();
+    ok = keyframe_creation_ && initialize();
     out.state = state_;
     out.new_keyframe = ok;
     out.inliers = ok ? current_.matched_count() : 0;
   } else {
-    if (state_ == TrackingState::kOk) {
+    const bool was_ok = state_ == TrackingState::kOk;
+    if (was_ok) {
       update_last_frame();
       if (has_velocity_) {
         ok = track_motion_model();
@@ -53,9 +54,14 @@ TrackingOutcome Tracker::track(Frame frame) {
       }
       if (!ok) ok = track_reference_keyframe();
     } else {
-      // Lost: without relocalization (issue 5) the best chance is that the camera is still
-      // near the reference keyframe; try to match it each frame.
-      ok = track_reference_keyframe();
+      // Lost: relocalize in the map when a relocalizer is set, else hope the camera is still
+      // near the reference keyframe and try to match it each frame.
+      current_.clear_matches();
+      if (relocalizer_ && relocalizer_(current_)) {
+        ok = true;
+        reference_ = current_.reference;
+      }
+      if (!ok) ok = track_reference_keyframe();
     }
     current_.reference = reference_;
     if (ok) {
@@ -68,11 +74,12 @@ TrackingOutcome Tracker::track(Frame frame) {
     out.inliers = ok ? inliers_ : 0;
     if (ok) {
       velocity_ = current_.T_cw * last_.T_cw.inverse();
-      has_velocity_ = true;
+      // After a loss the last tracked frame is from another time and place: no velocity.
+      has_velocity_ = was_ok;
       // Temporary (visual-odometry) matches do not count towards the map.
       for (auto& p : current_.points)
         if (p && p->observation_count() == 0) p = nullptr;
-      if (need_new_keyframe()) {
+      if (keyframe_creation_ && need_new_keyframe()) {
         create_new_keyframe();
         out.new_keyframe = true;
       }
@@ -95,6 +102,21 @@ TrackingOutcome Tracker::track(Frame frame) {
     has_last_ = true;
   }
   return out;
+}
+
+void Tracker::start_lost() {
+  reset();
+  state_ = TrackingState::kLost;
+}
+
+void Tracker::compact_records() {
+  std::lock_guard lock(map_.mutex());
+  for (auto& r : records_) {
+    while (r.reference && r.reference->bad && r.reference->parent) {
+      r.T_cr = r.T_cr * r.reference->T_cp;
+      r.reference = r.reference->parent;
+    }
+  }
 }
 
 bool Tracker::initialize() {

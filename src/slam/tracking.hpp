@@ -7,6 +7,7 @@
 //
 // Ownership: the Tracker owns the current and last Frame and its per-frame records; it takes
 // the map lock for the whole of a frame's matching and optimization (see map.hpp).
+#include <functional>
 #include <memory>
 #include <vector>
 
@@ -71,6 +72,20 @@ class Tracker {
   const std::vector<FrameRecord>& records() const { return records_; }
   void reset();
 
+  // Localization mode turns keyframe creation (and so map growth) off; with it off an empty
+  // map is not initialized either.
+  void set_keyframe_creation(bool enabled) { keyframe_creation_ = enabled; }
+  bool keyframe_creation() const { return keyframe_creation_; }
+  // After a map was loaded: the next frames must be relocalized in it.
+  void start_lost();
+  // Called with the map lock held on every lost frame before the reference-keyframe fallback:
+  // on success it has set the frame's pose, matches and reference keyframe.
+  using Relocalizer = std::function<bool(Frame& frame)>;
+  void set_relocalizer(Relocalizer relocalizer) { relocalizer_ = std::move(relocalizer); }
+  // Re-expresses records held by culled keyframes relative to the nearest live ancestor, so
+  // the records stop keeping culled keyframes alive. Takes the map lock.
+  void compact_records();
+
  private:
   std::shared_ptr<const FrameContext> ctx_;
   Map& map_;
@@ -89,6 +104,8 @@ class Tracker {
   long last_kf_frame_id_ = 0;
   int inliers_ = 0;
   std::vector<FrameRecord> records_;
+  bool keyframe_creation_ = true;
+  Relocalizer relocalizer_;
 
   bool initialize();
   void update_last_frame();
