@@ -520,7 +520,7 @@ MapFileInfo decode_map(const std::uint8_t* data, std::size_t size, const std::st
 
   // Map points.
   Reader pr(spans[2].data, spans[2].size, name, "MPTS");
-  const std::size_t n_points = pr.count(96 + descriptor_bytes, "point count");
+  const std::size_t n_points = pr.count(92 + descriptor_bytes, "point count");
   std::vector<std::shared_ptr<MapPoint>> pts;
   std::unordered_map<long, std::shared_ptr<MapPoint>> point_by_id;
   pts.reserve(n_points);

@@ -98,7 +98,8 @@ MapFileInfo System::load_map(const std::filesystem::path& path) {
   if (next_frame_id_ != 0) throw Failure("load_map: a map can only be loaded before the first frame");
   // The vocabulary checksum joins here once the keyframe database exists (issue 5, places).
   MapFileInfo info = read_map_file(path, map_, ctx_);
-  tracker_->start_lost();
+  // An empty saved map is a fresh start: tracking initializes a new one (in SLAM mode).
+  if (info.keyframes > 0) tracker_->start_lost();
   return info;
 }
 
