@@ -68,6 +68,9 @@ TrackingOutcome Tracker::track(Frame frame) {
       const auto start = std::chrono::steady_clock::now();
       ok = track_local_map();
       if (timer_) timer_->add("local_map", ms_since(start));
+      // Localization mode keeps going on visual odometry when too few map points are in
+      // view (ORB-SLAM's mbVO); the local map is searched again on every frame.
+      if (!ok && !keyframe_creation_ && was_ok && current_.matched_count() >= 20) ok = true;
     }
     state_ = ok ? TrackingState::kOk : TrackingState::kLost;
     out.state = state_;
@@ -199,7 +202,11 @@ bool Tracker::track_motion_model() {
   }
   if (n < 20) return false;
   optimize_frame_pose(current_);
-  return discard_outliers() >= 10;
+  const int real = discard_outliers();
+  // Localization mode: where the map is thin, matches to the last frame's depth points
+  // (visual odometry) carry the pose, as in ORB-SLAM's only-tracking mode.
+  if (!keyframe_creation_) return real >= 10 || current_.matched_count() >= 20;
+  return real >= 10;
 }
 
 bool Tracker::track_reference_keyframe() {
