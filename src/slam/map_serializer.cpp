@@ -51,12 +51,14 @@ class Writer {
   template <typename T>
   void put(T v) {
     static_assert(std::is_trivially_copyable_v<T>);
-    const auto* p = reinterpret_cast<const std::uint8_t*>(&v);
-    bytes.insert(bytes.end(), p, p + sizeof(T));
+    raw(&v, sizeof(T));
   }
   void raw(const void* data, std::size_t n) {
-    const auto* p = static_cast<const std::uint8_t*>(data);
-    bytes.insert(bytes.end(), p, p + n);
+    if (n == 0) return;
+    const std::size_t at = bytes.size();
+    if (at + n > bytes.capacity()) bytes.reserve(std::max(2 * bytes.capacity(), at + n));
+    bytes.resize(at + n);
+    std::memcpy(bytes.data() + at, data, n);
   }
   void vec3(const Eigen::Vector3d& v) {
     for (int i = 0; i < 3; ++i) put(v[i]);
@@ -275,6 +277,9 @@ std::vector<std::uint8_t> encode_map(const Map& map, const FrameContext& ctx, st
   write_context(context, ctx, map, descriptor_type, descriptor_cols);
 
   Writer kfw;
+  std::size_t keypoints = 0;
+  for (const auto& kf : keyframes) keypoints += kf->f->size();
+  kfw.bytes.reserve(4 + keyframes.size() * 100 + keypoints * (kKeypointBytes + descriptor_bytes + 16));
   kfw.put(static_cast<std::uint32_t>(keyframes.size()));
   for (const auto& kf : keyframes) {
     const auto& f = *kf->f;
@@ -313,6 +318,7 @@ std::vector<std::uint8_t> encode_map(const Map& map, const FrameContext& ctx, st
   }
 
   Writer pw;
+  pw.bytes.reserve(4 + points.size() * (92 + descriptor_bytes + 3 * 12));
   pw.put(static_cast<std::uint32_t>(points.size()));
   for (const auto& p : points) {
     pw.put(static_cast<std::int64_t>(p->id));
@@ -359,23 +365,22 @@ std::vector<std::uint8_t> encode_map(const Map& map, const FrameContext& ctx, st
     }
   }
 
-  Writer body;
-  section(body, kContextTag, context);
-  section(body, kKeyFramesTag, kfw);
-  section(body, kPointsTag, pw);
-  section(body, kCovisibilityTag, cw);
-
+  const std::size_t body_size = 4 * 16 + context.bytes.size() + kfw.bytes.size() + pw.bytes.size() + cw.bytes.size();
   Writer out;
+  out.bytes.reserve(kHeaderSize + body_size);
   out.raw(kMagic, sizeof(kMagic));
   out.put(kMapFileVersion);
   out.put(kByteOrderMark);
   out.put(vocabulary_checksum);
   out.put(static_cast<std::uint32_t>(std::size(kSectionOrder)));
   out.put(static_cast<std::uint32_t>(0));
-  out.put(static_cast<std::uint64_t>(body.bytes.size()));
+  out.put(static_cast<std::uint64_t>(body_size));
   out.put(map_file_crc32(out.bytes.data(), out.bytes.size()));
   out.put(static_cast<std::uint32_t>(0));
-  out.bytes.insert(out.bytes.end(), body.bytes.begin(), body.bytes.end());
+  section(out, kContextTag, context);
+  section(out, kKeyFramesTag, kfw);
+  section(out, kPointsTag, pw);
+  section(out, kCovisibilityTag, cw);
   return std::move(out.bytes);
 }
 
