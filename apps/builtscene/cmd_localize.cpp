@@ -25,7 +25,7 @@ namespace builtscene::app {
 namespace {
 
 struct LocalizeOptions {
-  std::filesystem::path dataset, camera, map, trajectory;
+  std::filesystem::path dataset, camera, map, trajectory, vocabulary;
   long max_frames = 0;
 };
 
@@ -44,6 +44,7 @@ nlohmann::json run_localize(const LocalizeOptions& opt) {
   const auto camera_file = opt.camera.empty() ? opt.dataset / "camera.yaml" : opt.camera;
   slam::SystemOptions so;
   so.orb = OrbExtractorOptions::from_settings(SettingsFile::load(camera_file));
+  so.vocabulary = opt.vocabulary;
   if (!opt.trajectory.empty()) {
     std::ofstream probe(opt.trajectory, std::ios::app);
     if (!probe) throw InputError(located(opt.trajectory, 0, "cannot write output file"));
@@ -112,7 +113,7 @@ nlohmann::json run_localize(const LocalizeOptions& opt) {
       {"processed_frames", processed},
       {"tracked_frames", tracked},
       {"lost_frames", lost},
-      {"relocalizations", system.relocalizations()},
+      {"relocalizations", {{"count", system.relocalized_frames().size()}, {"frames", system.relocalized_frames()}}},
       {"first_relocalized_frame", system.first_relocalized_frame() >= 0 ? nlohmann::json(system.first_relocalized_frame())
                                                                          : nlohmann::json(nullptr)},
       {"bad_input",
@@ -128,7 +129,7 @@ nlohmann::json run_localize(const LocalizeOptions& opt) {
       {"trajectory_poses", traj.size()},
   };
   spdlog::info("localize: {} frames, {} tracked, {} lost, {} relocalizations, {:.1f} fps", n, tracked, lost,
-               system.relocalizations(), j["fps"].get<double>());
+               system.relocalized_frames().size(), j["fps"].get<double>());
   return j;
 }
 
@@ -142,6 +143,8 @@ const bool registered = register_command({
       cmd.add_option("--camera", opt->camera, "Camera settings (default DATASET/camera.yaml)");
       cmd.add_option("--trajectory", opt->trajectory, "Output: TUM trajectory of the tracked frames");
       cmd.add_option("--max-frames", opt->max_frames, "Only the first N frames (0 = all)");
+      cmd.add_option("--vocabulary", opt->vocabulary,
+                     "Bag-of-words vocabulary (default: the shipped one; must be the map's)");
       return [opt] { return run_localize(*opt); };
     },
     .order = 41});

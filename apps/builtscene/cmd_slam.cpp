@@ -31,6 +31,8 @@ struct SlamOptions {
   std::filesystem::path map_in, map_out;
   std::string mode = "slam", mode_schedule, slam_region, world = "camera";
   double camera_height = 1.0;
+  std::filesystem::path vocabulary;
+  bool no_relocalization = false;
 };
 
 // The mode plan from the command line; the region is on the ground plane of the map's world.
@@ -56,6 +58,8 @@ nlohmann::json run_slam(const SlamOptions& opt) {
   slam::SystemOptions so;
   so.orb = OrbExtractorOptions::from_settings(SettingsFile::load(camera_file));
   so.mapping_thread = !opt.sync_mapping;
+  so.vocabulary = opt.vocabulary;
+  so.relocalization = !opt.no_relocalization;
   // Fail on an unwritable output before spending minutes on the sequence.
   const auto start_mode = slam::parse_mode(opt.mode);
   if (!start_mode) throw InputError("--mode: '" + opt.mode + "' must be slam or localize");
@@ -147,6 +151,7 @@ nlohmann::json run_slam(const SlamOptions& opt) {
                         {"to", slam::to_string(sw.to)}, {"reason", sw.reason}});
 
   const auto stats = system.mapping_stats();
+  const auto relocalized = system.relocalized_frames();
   const long processed = static_cast<long>(n) - out_of_order - unreadable_rgb;
   const double frame_median = system.timer().median_ms("frame");
   nlohmann::json j = {
@@ -175,7 +180,8 @@ nlohmann::json run_slam(const SlamOptions& opt) {
         {"bundle_adjustments", stats.bundle_adjustments},
         {"bundle_adjustments_aborted", stats.bundle_adjustments_aborted},
         {"max_queue", stats.max_queue}}},
-      {"relocalizations", system.relocalizations()},
+      {"relocalizations", {{"count", relocalized.size()}, {"frames", relocalized}}},
+      {"vocabulary", system.vocabulary() ? so.vocabulary.empty() ? slam::default_vocabulary_path().string() : so.vocabulary.string() : ""},
       {"mode_switches", switches},
       {"map_in", map_in_json},
       {"map_out", map_out_json},
@@ -212,6 +218,10 @@ const bool registered = register_command({
           ->capture_default_str();
       cmd.add_option("--camera-height", opt->camera_height, "With --world camera: first camera above the floor, m")
           ->capture_default_str();
+      cmd.add_option("--vocabulary", opt->vocabulary,
+                     "Bag-of-words vocabulary for relocalization (default: the shipped data/vocab/orb_k10_L4.bsvoc)");
+      cmd.add_flag("--no-relocalization", opt->no_relocalization,
+                   "When lost, only match the last reference keyframe (no place recognition)");
       return [opt] { return run_slam(*opt); };
     },
     .order = 40});

@@ -13,6 +13,7 @@
 #include <set>
 #include <vector>
 
+#include "features/bow_vector.hpp"
 #include "slam/frame.hpp"
 
 namespace builtscene::slam {
@@ -57,6 +58,11 @@ class KeyFrame : public std::enable_shared_from_this<KeyFrame> {
   std::set<KeyFrame*> children;
   bool has_parent_link = false;  // set once the keyframe joined the tree
   SE3 T_cp;                      // pose relative to parent, frozen when this keyframe turns bad
+
+  // Bag of words of the keypoint descriptors and its direct index, set once when the keyframe
+  // enters the KeyFrameDatabase (empty before). Guarded by the map lock like the rest.
+  BowVector bow;
+  FeatureVector bow_features;
 
   bool bad = false;
   bool keep = false;  // protected from culling (the first keyframe; later: loop candidates)

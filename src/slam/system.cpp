@@ -6,9 +6,19 @@
 #include <opencv2/imgproc.hpp>
 
 #include "core/errors.hpp"
+#include "core/logging.hpp"
+#include "features/bow_vocabulary.hpp"
 #include "slam/key_frame.hpp"
+#include "slam/keyframe_database.hpp"
+#include "slam/relocalizer.hpp"
 
 namespace builtscene::slam {
+
+std::filesystem::path default_vocabulary_path() {
+  for (const char* p : {BUILTSCENE_SOURCE_VOCABULARY, BUILTSCENE_INSTALLED_VOCABULARY})
+    if (std::filesystem::is_regular_file(p)) return p;
+  return {};
+}
 
 System::System(const RgbdCameraSettings& settings, SystemOptions options)
     : settings_(settings), options_(options), extractor_(options.orb) {
@@ -16,12 +26,27 @@ System::System(const RgbdCameraSettings& settings, SystemOptions options)
   options_.tracking.max_frames_between_kf = std::max(1, static_cast<int>(std::lround(settings_.fps)));
   mapping_ = std::make_unique<LocalMapping>(map_, options_.mapping, &timer_);
   tracker_ = std::make_unique<Tracker>(ctx_, map_, mapping_.get(), options_.tracking, &timer_);
+  const auto vocabulary_file = options_.vocabulary.empty() ? default_vocabulary_path() : options_.vocabulary;
+  if (vocabulary_file.empty()) {
+    spdlog::warn("no bag-of-words vocabulary (looked for {}): relocalization off", BUILTSCENE_SOURCE_VOCABULARY);
+  } else {
+    auto voc = std::make_shared<BowVocabulary>(BowVocabulary::load(vocabulary_file));
+    if (voc->kind() != ctx_->metric.kind)
+      throw InputError(located(vocabulary_file, 0, "vocabulary is for another descriptor kind than the SLAM's"));
+    vocabulary_ = voc;
+    database_ = std::make_unique<KeyFrameDatabase>(vocabulary_);
+    if (options_.relocalization) {
+      relocalizer_ = std::make_unique<Relocalizer>(*database_);
+      tracker_->set_relocalizer(relocalizer_.get());
+    }
+  }
   if (options_.mapping_thread) mapping_->start();
 }
 
 System::~System() {
   shutdown();
   std::lock_guard lock(map_.mutex());
+  if (database_) database_->clear();
   map_.clear();
 }
 
@@ -36,15 +61,17 @@ TrackingOutcome System::track_rgbd(const cv::Mat& image, const cv::Mat& depth_m,
   timer_.add("extraction", ms_since(start));
   const auto t0 = std::chrono::steady_clock::now();
   const int keypoints = static_cast<int>(features->size());
-  const long frame_id = next_frame_id_++;
-  Frame frame(frame_id, timestamp, std::move(features));
-  const TrackingState before = tracker_->state();
+  Frame frame(next_frame_id_++, timestamp, std::move(features));
   TrackingOutcome out = tracker_->track(std::move(frame));
   out.keypoints = keypoints;
   last_timestamp_ = timestamp;
-  if (before == TrackingState::kLost && out.state == TrackingState::kOk) {
-    ++relocalizations_;
-    if (first_relocalized_frame_ < 0) first_relocalized_frame_ = frame_id;
+  if (database_ && out.new_keyframe) {
+    // The new keyframe is the reference of the frame just recorded. Its bag of words costs
+    // ~0.2 ms (one tree descent per descriptor), cheap enough for the tracking thread.
+    const auto t_bow = std::chrono::steady_clock::now();
+    std::lock_guard lock(map_.mutex());
+    if (const auto& kf = tracker_->records().back().reference) database_->add(kf);
+    timer_.add("keyframe_bow", ms_since(t_bow));
   }
   if (!options_.mapping_thread) mapping_->run_pending();
   // Frame records must not keep culled keyframes (and their features) alive.
@@ -52,6 +79,10 @@ TrackingOutcome System::track_rgbd(const cv::Mat& image, const cv::Mat& depth_m,
   if (culled != culled_seen_) {
     culled_seen_ = culled;
     tracker_->compact_records();
+    if (database_) {
+      std::lock_guard lock(map_.mutex());
+      database_->purge_bad();
+    }
   }
   timer_.add("tracking", ms_since(t0));
   timer_.add("frame", ms_since(start));
@@ -94,10 +125,39 @@ std::optional<SE3> System::last_pose() const {
   return record_pose(records.back()).inverse();
 }
 
+std::uint64_t vocabulary_checksum(const BowVocabulary& voc) {
+  // FNV-1a over the tree (shape, word ids, weights, centres): any other vocabulary gives
+  // other bag-of-words vectors, so a map must not be used with it.
+  std::uint64_t h = 1469598103934665603ull;
+  auto mix = [&h](const void* data, std::size_t n) {
+    const auto* p = static_cast<const unsigned char*>(data);
+    for (std::size_t i = 0; i < n; ++i) h = (h ^ p[i]) * 1099511628211ull;
+  };
+  const int head[4] = {static_cast<int>(voc.kind()), voc.descriptor_cols(), voc.k(), voc.levels()};
+  mix(head, sizeof head);
+  for (std::size_t i = 0; i < voc.node_count(); ++i) {
+    const auto& n = voc.node(i);
+    mix(&n.parent, sizeof n.parent);
+    mix(&n.word, sizeof n.word);
+    mix(&n.weight, sizeof n.weight);
+    const cv::Mat c = voc.centre(i).clone();
+    mix(c.data, c.total() * c.elemSize());
+  }
+  return h == 0 ? 1 : h;  // 0 means "no vocabulary" in a map file
+}
+
 MapFileInfo System::load_map(const std::filesystem::path& path) {
   if (next_frame_id_ != 0) throw Failure("load_map: a map can only be loaded before the first frame");
-  // The vocabulary checksum joins here once the keyframe database exists (issue 5, places).
-  MapFileInfo info = read_map_file(path, map_, ctx_);
+  std::optional<std::uint64_t> checksum;
+  if (vocabulary_) checksum = vocabulary_checksum(*vocabulary_);
+  MapFileInfo info = read_map_file(path, map_, ctx_, checksum);
+  if (database_) {
+    // Bag-of-words vectors are not stored; the vocabulary in use recomputes them.
+    const auto t0 = std::chrono::steady_clock::now();
+    std::lock_guard lock(map_.mutex());
+    for (const auto& kf : map_.keyframes()) database_->add(kf);
+    timer_.add("map_bow", ms_since(t0));
+  }
   // An empty saved map is a fresh start: tracking initializes a new one (in SLAM mode).
   if (info.keyframes > 0) tracker_->start_lost();
   return info;
@@ -110,7 +170,7 @@ MapFileInfo System::save_map(const std::filesystem::path& path) {
     while (mapping_->queue_size() > 0 || !mapping_->accepts_keyframes())
       std::this_thread::sleep_for(std::chrono::milliseconds(2));
   }
-  return write_map_file(path, map_, *ctx_, 0);
+  return write_map_file(path, map_, *ctx_, vocabulary_ ? vocabulary_checksum(*vocabulary_) : 0);
 }
 
 void System::set_mode(Mode mode, const std::string& reason) {

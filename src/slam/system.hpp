@@ -15,7 +15,7 @@
 // or a loaded one once tracking has relocalized in it). In localization mode no keyframe or
 // point is added: tracking only matches against the map, and local mapping, getting no
 // keyframes, finishes its queue and idles. After a map is loaded, or whenever tracking is
-// lost, each frame is relocalized (the relocalizer plugs in through set_relocalizer).
+// lost, each frame is relocalized (bag-of-words relocalizer when a vocabulary is loaded).
 #include <filesystem>
 #include <memory>
 #include <optional>
@@ -33,6 +33,10 @@
 #include "slam/mode_plan.hpp"
 #include "slam/tracking.hpp"
 
+namespace builtscene {
+class BowVocabulary;
+}
+
 namespace builtscene::slam {
 
 struct SystemOptions {
@@ -40,7 +44,22 @@ struct SystemOptions {
   TrackingOptions tracking;
   LocalMappingOptions mapping;
   bool mapping_thread = true;  // false: local mapping runs inline after each keyframe (deterministic)
+  // Bag-of-words vocabulary for the keyframe database and relocalization. Empty: the
+  // shipped default (default_vocabulary_path()); when that is missing too, a lost frame
+  // is only matched against the last reference keyframe.
+  std::filesystem::path vocabulary;
+  bool relocalization = true;
 };
+
+// A fingerprint of a vocabulary, stored in saved maps (never 0).
+std::uint64_t vocabulary_checksum(const BowVocabulary& vocabulary);
+
+// The shipped ORB vocabulary: the source tree's data/vocab/orb_k10_L4.bsvoc, else the
+// installed copy; empty when neither exists.
+std::filesystem::path default_vocabulary_path();
+
+class KeyFrameDatabase;
+class Relocalizer;
 
 class System {
  public:
@@ -68,10 +87,12 @@ class System {
   void set_mode(Mode mode, const std::string& reason = "api");
   Mode mode() const { return mode_; }
   const std::vector<ModeSwitch>& mode_switches() const { return mode_switches_; }
-  void set_relocalizer(Tracker::Relocalizer relocalizer) { tracker_->set_relocalizer(std::move(relocalizer)); }
-  // Frames on which tracking went from lost (or a freshly loaded map) to tracked.
-  long relocalizations() const { return relocalizations_; }
-  long first_relocalized_frame() const { return first_relocalized_frame_; }  // -1: none yet
+  // Test hook tried before the relocalizer on lost frames (see Tracker::set_relocalization_hook).
+  void set_relocalization_hook(Tracker::RelocalizationHook hook) { tracker_->set_relocalization_hook(std::move(hook)); }
+  long first_relocalized_frame() const {  // -1: none yet
+    const auto& f = tracker_->relocalized_frames();
+    return f.empty() ? -1 : f.front();
+  }
 
   // Camera-to-world pose of the last frame passed to track_rgbd, if it was tracked.
   std::optional<SE3> last_pose() const;
@@ -90,6 +111,13 @@ class System {
   // The map itself, for relocalizers and inspection; follow its lock rule (map.hpp).
   Map& map() { return map_; }
 
+  // Place recognition: null / empty without a vocabulary. The database is guarded by the
+  // map lock (see keyframe_database.hpp).
+  const KeyFrameDatabase* keyframe_database() const { return database_.get(); }
+  std::shared_ptr<const BowVocabulary> vocabulary() const { return vocabulary_; }
+  // Frame ids (0-based count of frames passed to track_rgbd) where relocalization succeeded.
+  std::vector<long> relocalized_frames() const { return tracker_->relocalized_frames(); }
+
  private:
   RgbdCameraSettings settings_;
   SystemOptions options_;
@@ -99,13 +127,14 @@ class System {
   Map map_;
   std::unique_ptr<LocalMapping> mapping_;
   std::unique_ptr<Tracker> tracker_;
+  std::shared_ptr<const BowVocabulary> vocabulary_;
+  std::unique_ptr<KeyFrameDatabase> database_;
+  std::unique_ptr<Relocalizer> relocalizer_;
   long next_frame_id_ = 0;
   bool shut_down_ = false;
   Mode mode_ = Mode::kSlam;
   std::vector<ModeSwitch> mode_switches_;
   double last_timestamp_ = 0;
-  long relocalizations_ = 0;
-  long first_relocalized_frame_ = -1;
   long culled_seen_ = 0;
 
   SE3 record_pose(const Tracker::FrameRecord& r) const;  // T_cw; map lock held

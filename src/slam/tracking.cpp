@@ -9,6 +9,7 @@
 #include "slam/map_point.hpp"
 #include "slam/matcher.hpp"
 #include "slam/pose_optimizer.hpp"
+#include "slam/relocalizer.hpp"
 
 namespace builtscene::slam {
 
@@ -39,6 +40,7 @@ TrackingOutcome Tracker::track(Frame frame) {
   TrackingOutcome out;
   std::unique_lock lock(map_.mutex());
   bool ok = false;
+  bool relocalized = false;
   if (state_ == TrackingState::kNotInitialized) {
     ok = keyframe_creation_ && initialize();
     out.state = state_;
@@ -54,14 +56,27 @@ TrackingOutcome Tracker::track(Frame frame) {
       }
       if (!ok) ok = track_reference_keyframe();
     } else {
-      // Lost: relocalize in the map when a relocalizer is set, else hope the camera is still
-      // near the reference keyframe and try to match it each frame.
       current_.clear_matches();
-      if (relocalizer_ && relocalizer_(current_)) {
-        ok = true;
+      if (relocalization_hook_ && relocalization_hook_(current_)) {
+        ok = relocalized = true;
         reference_ = current_.reference;
+        relocalized_frames_.push_back(current_.id);
+      } else if (relocalizer_) {
+        // Lost: look for the place in the whole map.
+        const auto start = std::chrono::steady_clock::now();
+        auto kf = relocalizer_->relocalize(current_);
+        if (timer_) timer_->add("relocalization", ms_since(start));
+        if (kf) {
+          ok = true;
+          relocalized = true;
+          reference_ = kf;
+          relocalized_frames_.push_back(current_.id);
+        }
+      } else {
+        // Lost without a vocabulary: the best chance is that the camera is still near the
+        // reference keyframe; try to match it each frame.
+        ok = track_reference_keyframe();
       }
-      if (!ok) ok = track_reference_keyframe();
     }
     current_.reference = reference_;
     if (ok) {
@@ -77,8 +92,9 @@ TrackingOutcome Tracker::track(Frame frame) {
     out.inliers = ok ? inliers_ : 0;
     if (ok) {
       velocity_ = current_.T_cw * last_.T_cw.inverse();
-      // After a loss the last tracked frame is from another time and place: no velocity.
-      has_velocity_ = was_ok;
+      // After a loss or relocalization the last tracked frame is from another time and place:
+      // no motion to extrapolate.
+      has_velocity_ = was_ok && !relocalized;
       // Temporary (visual-odometry) matches do not count towards the map.
       for (auto& p : current_.points)
         if (p && p->observation_count() == 0) p = nullptr;

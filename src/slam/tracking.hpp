@@ -19,6 +19,7 @@ namespace builtscene::slam {
 class Map;
 class KeyFrame;
 class KeyFrameSink;
+class Relocalizer;
 
 struct TrackingOptions {
   int min_init_points = 500;       // keypoints with depth needed to start a map
@@ -78,13 +79,18 @@ class Tracker {
   bool keyframe_creation() const { return keyframe_creation_; }
   // After a map was loaded: the next frames must be relocalized in it.
   void start_lost();
-  // Called with the map lock held on every lost frame before the reference-keyframe fallback:
-  // on success it has set the frame's pose, matches and reference keyframe.
-  using Relocalizer = std::function<bool(Frame& frame)>;
-  void set_relocalizer(Relocalizer relocalizer) { relocalizer_ = std::move(relocalizer); }
+  // Test hook, tried before the relocalizer on every lost frame with the map lock held: on
+  // success it has set the frame's pose, matches and reference keyframe.
+  using RelocalizationHook = std::function<bool(Frame& frame)>;
+  void set_relocalization_hook(RelocalizationHook hook) { relocalization_hook_ = std::move(hook); }
   // Re-expresses records held by culled keyframes relative to the nearest live ancestor, so
   // the records stop keeping culled keyframes alive. Takes the map lock.
   void compact_records();
+  // When set, a lost frame is relocalized against the whole map (BoW candidates, EPnP)
+  // instead of matched against the last reference keyframe only. Not owned.
+  void set_relocalizer(const Relocalizer* relocalizer) { relocalizer_ = relocalizer; }
+  // Ids of the frames where tracking resumed through relocalization.
+  const std::vector<long>& relocalized_frames() const { return relocalized_frames_; }
 
  private:
   std::shared_ptr<const FrameContext> ctx_;
@@ -105,7 +111,9 @@ class Tracker {
   int inliers_ = 0;
   std::vector<FrameRecord> records_;
   bool keyframe_creation_ = true;
-  Relocalizer relocalizer_;
+  RelocalizationHook relocalization_hook_;
+  const Relocalizer* relocalizer_ = nullptr;
+  std::vector<long> relocalized_frames_;
 
   bool initialize();
   void update_last_frame();

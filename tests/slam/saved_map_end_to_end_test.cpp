@@ -2,10 +2,8 @@
 // generator): build a map in SLAM mode, check culled keyframes and points are freed, save,
 // reload (byte-identical re-save), localize on another sequence of the same room, extend the
 // map into an unmapped part and localize in both parts, and drive `builtscene localize`.
-//
-// Until the bag-of-words relocalizer lands, the first relocalization in these tests comes
-// from KnownPoseRelocalizer below, which knows the true pose (test only; the product has no
-// such oracle). Everything after that first frame is the system's own tracking.
+// Relocalization after loading is the product's (bag-of-words candidates with the shipped
+// vocabulary, EPnP, pose optimization).
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -21,8 +19,6 @@
 #include "io/tum_dataset.hpp"
 #include "slam/key_frame.hpp"
 #include "slam/map_point.hpp"
-#include "slam/matcher.hpp"
-#include "slam/pose_optimizer.hpp"
 #include "slam/system.hpp"
 
 namespace builtscene::slam {
@@ -78,54 +74,6 @@ fs::path world(const std::string& name, int seed, int frames) {
 // loses the camera near frame 146, where the robot turns towards a plain wall; see
 // docs/slam.md. The map covers the first 70 frames, the extension drives 65 frames further.
 constexpr int kMapFrames = 70, kLongFrames = 135;
-
-// Test-only stand-in for the BoW relocalizer: the true camera pose, brought into the map's
-// world, picks the nearest keyframe; descriptor matching against it and pose optimization
-// then do what a relocalizer would after its candidate search.
-class KnownPoseRelocalizer {
- public:
-  KnownPoseRelocalizer(Map& map, Trajectory truth, const Sim3& gt_to_map) : map_(map), gt_to_map_(gt_to_map) {
-    for (const auto& p : truth) truth_[p.timestamp] = p.pose;
-  }
-  bool operator()(Frame& frame) {
-    if (done_) return false;
-    const auto it = truth_.lower_bound(frame.timestamp - 0.005);
-    if (it == truth_.end() || std::abs(it->first - frame.timestamp) > 0.005) return false;
-    const SE3 T_wc = gt_to_map_.transform_pose(it->second);
-    std::shared_ptr<KeyFrame> best;
-    double best_d = 1e9;
-    for (const auto& kf : map_.keyframes()) {
-      const double d = (kf->camera_center() - T_wc.translation()).norm() +
-                       0.5 * (1 - (kf->pose_inverse().rotation() * Eigen::Vector3d::UnitZ())
-                                      .dot(T_wc.rotation() * Eigen::Vector3d::UnitZ()));
-      if (!kf->bad && d < best_d) {
-        best_d = d;
-        best = kf;
-      }
-    }
-    if (!best) return false;
-    frame.clear_matches();
-    if (search_by_descriptor(*best, frame) < 15) return false;
-    frame.set_pose(T_wc.inverse());
-    optimize_frame_pose(frame);
-    int inliers = 0;
-    for (std::size_t i = 0; i < frame.points.size(); ++i) {
-      if (!frame.points[i]) continue;
-      if (frame.outlier[i]) frame.points[i] = nullptr;
-      else ++inliers;
-    }
-    if (inliers < 15) return false;
-    frame.reference = best;
-    done_ = true;
-    return true;
-  }
-
- private:
-  Map& map_;
-  Sim3 gt_to_map_;
-  std::map<double, SE3> truth_;
-  bool done_ = false;
-};
 
 struct RunResult {
   long frames = 0, tracked = 0, first_tracked = -1;
@@ -289,10 +237,12 @@ TEST(SavedMapEndToEnd, CulledKeyframesAreFreed) {
   ASSERT_GT(culled, 0);
   EXPECT_EQ(alive, 0);
   // Frames tracked against culled keyframes are still placed (through the compacted records).
+  // The loosened rule culls nearly every keyframe and costs accuracy (measured 5.9 cm); a
+  // broken re-expression of the records would put frames metres off.
   const auto traj = system.trajectory();
   EXPECT_GE(traj.size(), trajectory_before);
   const auto ate = absolute_trajectory_error(data.groundtruth(), traj, Alignment::kSE3).stats;
-  EXPECT_LT(ate.rmse, 0.05);
+  EXPECT_LT(ate.rmse, 0.10);
 }
 
 TEST(SavedMapEndToEnd, LoadedMapSavesToTheSameBytes) {
@@ -313,7 +263,6 @@ TEST(SavedMapEndToEnd, LocalizesAnotherSequenceOfTheRoomWithoutChangingTheMap) {
   System system(data.settings());
   system.load_map(m.path);
   system.set_mode(Mode::kLocalization);
-  system.set_relocalizer(KnownPoseRelocalizer(system.map(), data.groundtruth(), m.est_to_gt.inverse()));
   // The part of C inside A's map (C drives the same loop from the same start).
   const auto r = run(system, data, 0, kMapFrames - 5);
   const auto ate = ate_in_first_frame(data.groundtruth(), r.trajectory, m.est_to_gt);
@@ -334,7 +283,6 @@ TEST(SavedMapEndToEnd, ExtendedMapLocalizesInTheOldAndTheNewPart) {
   {
     System system(c.settings());
     system.load_map(m.path);
-    system.set_relocalizer(KnownPoseRelocalizer(system.map(), c.groundtruth(), m.est_to_gt.inverse()));
     const auto r = run(system, c, 0, kLongFrames);
     const auto ate = ate_in_first_frame(c.groundtruth(), r.trajectory, m.est_to_gt);
     std::printf("extend with C: tracked %ld/%ld, keyframes %zu -> %zu, ATE in A's frame %.2f cm\n", r.tracked, r.frames,
@@ -348,7 +296,6 @@ TEST(SavedMapEndToEnd, ExtendedMapLocalizesInTheOldAndTheNewPart) {
   System system(d.settings());
   const auto info = system.load_map(extended);
   system.set_mode(Mode::kLocalization);
-  system.set_relocalizer(KnownPoseRelocalizer(system.map(), d.groundtruth(), m.est_to_gt.inverse()));
   const auto r = run(system, d, 0, kLongFrames);
   long old_part = 0, new_part = 0;
   for (std::size_t i = 0; i < r.tracked_at.size(); ++i)

@@ -1,0 +1,144 @@
+#include "slam/relocalizer.hpp"
+
+#include <opencv2/calib3d.hpp>
+#include <opencv2/core/eigen.hpp>
+
+#include "core/so3.hpp"
+#include "slam/bow_matcher.hpp"
+#include "slam/key_frame.hpp"
+#include "slam/keyframe_database.hpp"
+#include "slam/map_point.hpp"
+#include "slam/matcher.hpp"
+#include "slam/pose_optimizer.hpp"
+
+namespace builtscene::slam {
+
+namespace {
+
+// Drops the matches pose optimization marked as outliers; returns the inliers left.
+int keep_inliers(Frame& frame) {
+  int n = 0;
+  for (std::size_t i = 0; i < frame.points.size(); ++i) {
+    if (!frame.points[i]) continue;
+    if (frame.outlier[i]) {
+      frame.points[i] = nullptr;
+      frame.outlier[i] = 0;
+    } else {
+      ++n;
+    }
+  }
+  return n;
+}
+
+}  // namespace
+
+Relocalizer::Relocalizer(const KeyFrameDatabase& database, RelocalizerOptions options)
+    : db_(database), opt_(options) {}
+
+int Relocalizer::search_local_map(Frame& frame, const KeyFrame& candidate, float th) const {
+  const auto& ctx = *frame.f->ctx;
+  const Intrinsics K = intrinsics_of(ctx);
+  const Eigen::Vector3d O = frame.camera_center();
+  std::vector<KeyFrame*> kfs = candidate.best_covisibles(10);
+  kfs.push_back(const_cast<KeyFrame*>(&candidate));
+  std::vector<const MapPoint*> already;
+  for (const auto& p : frame.points)
+    if (p) already.push_back(p.get());
+  std::sort(already.begin(), already.end());
+  std::vector<ProjectedPoint> candidates;
+  std::vector<const MapPoint*> seen;
+  for (KeyFrame* kf : kfs) {
+    if (kf->bad) continue;
+    for (const auto& p : kf->points) {
+      if (!p || p->bad || std::binary_search(already.begin(), already.end(), p.get())) continue;
+      if (std::find(seen.begin(), seen.end(), p.get()) != seen.end()) continue;
+      seen.push_back(p.get());
+      const Eigen::Vector3d pc = frame.T_cw * p->position;
+      if (pc.z() <= 0) continue;
+      const double inv_z = 1.0 / pc.z();
+      const double u = K.fx * pc.x() * inv_z + K.cx, v = K.fy * pc.y() * inv_z + K.cy;
+      if (!ctx.in_image(u, v)) continue;
+      const Eigen::Vector3d po = p->position - O;
+      const double dist = po.norm();
+      if (dist < 0.8 * p->min_distance || dist > 1.2 * p->max_distance) continue;
+      const double view_cos = po.dot(p->normal) / dist;
+      if (view_cos < 0.5) continue;
+      candidates.push_back({p, static_cast<float>(u), static_cast<float>(v), static_cast<float>(u - K.bf * inv_z),
+                            p->predict_level(dist, ctx.pyramid), static_cast<float>(view_cos)});
+    }
+  }
+  return search_local_points(frame, candidates, th);
+}
+
+std::shared_ptr<KeyFrame> Relocalizer::relocalize(Frame& frame) const {
+  ++stats_.attempts;
+  frame.clear_matches();
+  if (frame.size() == 0 || db_.size() == 0) return nullptr;
+  BowVector bow;
+  FeatureVector features;
+  db_.compute_bow(frame.f->descriptors, bow, features);
+  auto candidates = db_.relocalization_candidates(bow);
+  if (static_cast<int>(candidates.size()) > opt_.max_candidates) candidates.resize(static_cast<std::size_t>(opt_.max_candidates));
+
+  const auto& cam = frame.f->ctx->camera;
+  const cv::Matx33d K(cam.fx, 0, cam.cx, 0, cam.fy, cam.cy, 0, 0, 1);
+  for (KeyFrame* kf : candidates) {
+    if (kf->bad) continue;
+    int n = 0;
+    auto matches = search_by_bow(*kf, *frame.f, features, &n);
+    if (n < opt_.min_bow_matches) continue;
+    std::vector<cv::Point3f> object;
+    std::vector<cv::Point2f> image;
+    std::vector<int> keypoint;
+    for (std::size_t i = 0; i < matches.size(); ++i) {
+      if (!matches[i]) continue;
+      const auto& X = matches[i]->position;
+      object.emplace_back(static_cast<float>(X.x()), static_cast<float>(X.y()), static_cast<float>(X.z()));
+      image.push_back(frame.f->keys_un[i].pt);
+      keypoint.push_back(static_cast<int>(i));
+    }
+    cv::Mat rvec, tvec;
+    std::vector<int> inliers;
+    bool found = false;
+    try {
+      found = cv::solvePnPRansac(object, image, K, cv::noArray(), rvec, tvec, false, opt_.ransac_iterations,
+                                 opt_.ransac_reprojection_px, 0.99, inliers, cv::SOLVEPNP_EPNP);
+    } catch (const cv::Exception&) {
+      found = false;  // degenerate configurations make EPnP throw; try the next candidate
+    }
+    if (!found || static_cast<int>(inliers.size()) < 10) continue;
+    cv::Mat R;
+    cv::Rodrigues(rvec, R);
+    Eigen::Matrix3d Re;
+    Eigen::Vector3d te;
+    cv::cv2eigen(R, Re);
+    cv::cv2eigen(tvec, te);
+    frame.clear_matches();
+    frame.set_pose(SE3(Re, te));
+    for (int j : inliers) frame.points[static_cast<std::size_t>(keypoint[static_cast<std::size_t>(j)])] = matches[static_cast<std::size_t>(keypoint[static_cast<std::size_t>(j)])];
+    optimize_frame_pose(frame);
+    int good = keep_inliers(frame);
+    if (good < 10) continue;
+    if (good < opt_.min_inliers) {
+      // Guided search: ORB-SLAM's wide window first, then a narrow one once the pose is better.
+      const int added = search_local_map(frame, *kf, 4.0f);
+      if (good + added >= opt_.min_inliers) {
+        optimize_frame_pose(frame);
+        good = keep_inliers(frame);
+        if (good > 30 && good < opt_.min_inliers) {
+          search_local_map(frame, *kf, 1.5f);
+          optimize_frame_pose(frame);
+          good = keep_inliers(frame);
+        }
+      }
+    }
+    if (good >= opt_.min_inliers) {
+      ++stats_.successes;
+      return kf->shared_from_this();
+    }
+  }
+  frame.clear_matches();
+  return nullptr;
+}
+
+}  // namespace builtscene::slam
