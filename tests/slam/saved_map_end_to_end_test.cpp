@@ -335,6 +335,24 @@ TEST(SavedMapEndToEnd, CommandLineSavesLocalizesAndRejectsBadMaps) {
   EXPECT_EQ(j["tracked_frames"].get<long>() + j["lost_frames"].get<long>(), 20);
   EXPECT_EQ(j["keyframes_after"], m.keyframes);
 
+  // Region rule: SLAM inside y <= 1.5 m of the first camera's ground frame (ground y = the
+  // first camera's forward axis), localization beyond. The truth: the first frame whose true
+  // position, relative to the first camera, is more than 1.5 m ahead; the switch happens on
+  // the frame after it (the rule looks at the last tracked pose).
+  r = run_cli("slam --json --max-frames 90 --dataset " + a.string() + " --trajectory " +
+              (work_dir() / "region_traj.txt").string() + " --slam-region -1,-1,1,1.5 --world camera");
+  ASSERT_EQ(r.exit_code, 0);
+  j = nlohmann::json::parse(r.out);
+  const auto gt = TumDataset::open(a).groundtruth();
+  long expected = -1;
+  for (std::size_t i = 0; i < 90 && expected < 0; ++i)
+    if ((gt[0].pose.inverse() * gt[i].pose).translation().z() > 1.5) expected = static_cast<long>(i) + 1;
+  ASSERT_GT(expected, 0);
+  ASSERT_EQ(j["mode_switches"].size(), 1u);
+  EXPECT_EQ(j["mode_switches"][0]["reason"], "region");
+  EXPECT_EQ(j["mode_switches"][0]["to"], "localize");
+  EXPECT_NEAR(j["mode_switches"][0]["frame"].get<double>(), static_cast<double>(expected), 2.0);
+
   const auto bad = work_dir() / "bad.map";
   { std::ofstream(bad) << "not a map"; }
   r = run_cli("localize --dataset " + a.string() + " --map " + bad.string());
