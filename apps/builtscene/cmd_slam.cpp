@@ -1,5 +1,7 @@
 // `builtscene slam`: RGB-D SLAM over a TUM-layout sequence; writes the trajectory of every
-// tracked frame and the keyframe trajectory (TUM format).
+// tracked frame and the keyframe trajectory (TUM format); optionally starts from a saved map
+// (--map-in), saves the map (--map-out), and switches between SLAM and localization mode by
+// frame range (--mode-schedule) or by region on the ground plane (--slam-region).
 #include <chrono>
 #include <fstream>
 #include <limits>
@@ -12,6 +14,8 @@
 #include "core/settings_file.hpp"
 #include "io/trajectory.hpp"
 #include "io/tum_dataset.hpp"
+#include "nav/region.hpp"
+#include "ogm/ground_frame.hpp"
 #include "slam/system.hpp"
 #include "slam_ogm_output.hpp"
 
@@ -25,10 +29,30 @@ struct SlamOptions {
   std::filesystem::path keyframes;
   long max_frames = 0;
   bool sync_mapping = false;
+  std::filesystem::path map_in, map_out;
+  std::string mode = "slam", mode_schedule, slam_region, world = "camera";
+  double camera_height = 1.0;
   std::filesystem::path vocabulary;
   bool no_relocalization = false;
   SlamOgmOptions ogm;
 };
+
+// The mode plan from the command line; the region is on the ground plane of the map's world.
+slam::ModePlan make_mode_plan(const SlamOptions& opt) {
+  slam::ModePlan plan;
+  if (!opt.mode_schedule.empty()) plan.set_schedule(slam::ModeSchedule::parse(opt.mode_schedule));
+  if (!opt.slam_region.empty()) {
+    const Region region = Region::parse(opt.slam_region, "--slam-region");
+    GroundFrame ground;
+    if (!parse_ground_frame(opt.world, opt.camera_height, ground) || opt.world == "auto")
+      throw InputError("--world: '" + opt.world + "' must be zup or camera for --slam-region");
+    plan.set_region([region, ground](const SE3& T_wc) {
+      const Pose2D p = ground.to_2d(T_wc);
+      return region.contains({p.x, p.y});
+    });
+  }
+  return plan;
+}
 
 nlohmann::json run_slam(const SlamOptions& opt) {
   const TumDataset data = TumDataset::open(opt.dataset, opt.camera);
@@ -39,7 +63,10 @@ nlohmann::json run_slam(const SlamOptions& opt) {
   so.vocabulary = opt.vocabulary;
   so.relocalization = !opt.no_relocalization;
   // Fail on an unwritable output before spending minutes on the sequence.
-  for (const auto& out : {opt.trajectory, opt.keyframes}) {
+  const auto start_mode = slam::parse_mode(opt.mode);
+  if (!start_mode) throw InputError("--mode: '" + opt.mode + "' must be slam or localize");
+  const slam::ModePlan plan = make_mode_plan(opt);
+  for (const auto& out : {opt.trajectory, opt.keyframes, opt.map_out}) {
     if (out.empty()) continue;
     std::ofstream probe(out, std::ios::app);
     if (!probe) throw InputError(located(out, 0, "cannot write output file"));
@@ -48,6 +75,15 @@ nlohmann::json run_slam(const SlamOptions& opt) {
   std::optional<SlamOgmOutput> ogm;
   if (opt.ogm.enabled()) ogm.emplace(opt.ogm, data.settings().camera);
   slam::System system(data.settings(), so);
+  nlohmann::json map_in_json = nullptr;
+  if (!opt.map_in.empty()) {
+    const auto t0 = std::chrono::steady_clock::now();
+    const auto info = system.load_map(opt.map_in);
+    system.timer().add("map_load", ms_since(t0));
+    spdlog::info("map {}: {} keyframes, {} map points loaded", opt.map_in.string(), info.keyframes, info.points);
+    map_in_json = {{"path", opt.map_in.string()}, {"keyframes", info.keyframes}, {"map_points", info.points}};
+  }
+  system.set_mode(*start_mode, "start");
   const std::size_t n = opt.max_frames > 0 ? std::min<std::size_t>(data.size(), static_cast<std::size_t>(opt.max_frames))
                                            : data.size();
   long tracked = 0, lost = 0, lost_events = 0, not_initialized = 0;
@@ -79,6 +115,7 @@ nlohmann::json run_slam(const SlamOptions& opt) {
       spdlog::warn("frame {}: {}; tracked without depth", i, err.what());
     }
     last_timestamp = e.timestamp;
+    if (const auto d = plan.decide(static_cast<long>(i), system.last_pose())) system.set_mode(d->mode, d->reason);
     const auto out = system.track_rgbd(rgb, depth, e.timestamp);
     if (ogm) ogm->after_frame(system, out, e.timestamp, depth);
     if (out.keypoints < 20) ++no_features;
@@ -103,6 +140,20 @@ nlohmann::json run_slam(const SlamOptions& opt) {
   const Trajectory traj = system.trajectory();
   write_tum_trajectory(opt.trajectory, traj);
   if (!opt.keyframes.empty()) write_tum_trajectory(opt.keyframes, system.keyframe_trajectory());
+  nlohmann::json map_out_json = nullptr;
+  if (!opt.map_out.empty()) {
+    const auto t0 = std::chrono::steady_clock::now();
+    const auto info = system.save_map(opt.map_out);
+    system.timer().add("map_save", ms_since(t0));
+    spdlog::info("map {}: {} keyframes, {} map points, {} bytes saved", opt.map_out.string(), info.keyframes,
+                 info.points, info.bytes);
+    map_out_json = {{"path", opt.map_out.string()}, {"keyframes", info.keyframes}, {"map_points", info.points},
+                    {"bytes", info.bytes}};
+  }
+  nlohmann::json switches = nlohmann::json::array();
+  for (const auto& sw : system.mode_switches())
+    switches.push_back({{"frame", sw.frame}, {"timestamp", sw.timestamp}, {"from", slam::to_string(sw.from)},
+                        {"to", slam::to_string(sw.to)}, {"reason", sw.reason}});
 
   const nlohmann::json ogm_summary = ogm ? ogm->finish(system) : nlohmann::json();
   const auto stats = system.mapping_stats();
@@ -137,6 +188,9 @@ nlohmann::json run_slam(const SlamOptions& opt) {
         {"max_queue", stats.max_queue}}},
       {"relocalizations", {{"count", relocalized.size()}, {"frames", relocalized}}},
       {"vocabulary", system.vocabulary() ? so.vocabulary.empty() ? slam::default_vocabulary_path().string() : so.vocabulary.string() : ""},
+      {"mode_switches", switches},
+      {"map_in", map_in_json},
+      {"map_out", map_out_json},
       {"stage_ms", system.timer().summary()},
       {"trajectory", opt.trajectory.string()},
       {"trajectory_poses", traj.size()},
@@ -159,6 +213,18 @@ const bool registered = register_command({
       cmd.add_option("--max-frames", opt->max_frames, "Only the first N frames (0 = all)");
       cmd.add_flag("--sync-mapping", opt->sync_mapping,
                    "Run local mapping inline after each keyframe (deterministic, slower) instead of in its thread");
+      cmd.add_option("--map-in", opt->map_in, "Saved map to start from (tracking relocalizes in it, then extends it)");
+      cmd.add_option("--map-out", opt->map_out, "Output: the map at the end (binary, see docs/slam.md)");
+      cmd.add_option("--mode", opt->mode, "Mode at the start: slam or localize")->capture_default_str();
+      cmd.add_option("--mode-schedule", opt->mode_schedule,
+                     "Modes by frame range, e.g. 0-199:slam,200-399:localize (open end: 400-:slam)");
+      cmd.add_option("--slam-region", opt->slam_region,
+                     "SLAM mode while the camera is inside x0,y0,x1,y1 (or a polygon) on the ground plane, "
+                     "localization outside");
+      cmd.add_option("--world", opt->world, "Ground plane of --slam-region: camera (first camera, --camera-height) or zup")
+          ->capture_default_str();
+      cmd.add_option("--camera-height", opt->camera_height, "With --world camera: first camera above the floor, m")
+          ->capture_default_str();
       cmd.add_option("--vocabulary", opt->vocabulary,
                      "Bag-of-words vocabulary for relocalization (default: the shipped data/vocab/orb_k10_L4.bsvoc)");
       cmd.add_flag("--no-relocalization", opt->no_relocalization,

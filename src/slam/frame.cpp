@@ -65,6 +65,28 @@ Eigen::Vector3d FrameFeatures::unproject(std::size_t i) const {
   return {(p.x - cam.cx) * z / cam.fx, (p.y - cam.cy) * z / cam.fy, z};
 }
 
+void build_feature_grid(FrameFeatures& f) {
+  const auto& ctx = *f.ctx;
+  const std::size_t n = f.keys_un.size();
+  // Grid in CSR form: count, prefix sum, fill.
+  const int cells = FrameContext::kGridCols * FrameContext::kGridRows;
+  std::vector<int> cell_of(n, -1);
+  f.grid_start.assign(static_cast<std::size_t>(cells) + 1, 0);
+  for (std::size_t i = 0; i < n; ++i) {
+    const auto& p = f.keys_un[i].pt;
+    const int gx = static_cast<int>(std::floor((p.x - ctx.min_x) * ctx.grid_scale_x));
+    const int gy = static_cast<int>(std::floor((p.y - ctx.min_y) * ctx.grid_scale_y));
+    if (gx < 0 || gy < 0 || gx >= FrameContext::kGridCols || gy >= FrameContext::kGridRows) continue;
+    cell_of[i] = gy * FrameContext::kGridCols + gx;
+    ++f.grid_start[static_cast<std::size_t>(cell_of[i]) + 1];
+  }
+  for (int c = 0; c < cells; ++c) f.grid_start[static_cast<std::size_t>(c) + 1] += f.grid_start[static_cast<std::size_t>(c)];
+  f.grid_items.assign(static_cast<std::size_t>(f.grid_start.back()), -1);
+  std::vector<int> fill(f.grid_start.begin(), f.grid_start.end() - 1);
+  for (std::size_t i = 0; i < n; ++i)
+    if (cell_of[i] >= 0) f.grid_items[static_cast<std::size_t>(fill[static_cast<std::size_t>(cell_of[i])]++)] = static_cast<int>(i);
+}
+
 std::shared_ptr<const FrameFeatures> make_rgbd_features(const cv::Mat& gray, const cv::Mat& depth_m,
                                                         std::shared_ptr<const FrameContext> ctx, OrbExtractor& extractor) {
   auto f = std::make_shared<FrameFeatures>();
@@ -92,23 +114,7 @@ std::shared_ptr<const FrameFeatures> make_rgbd_features(const cv::Mat& gray, con
       f->u_right[i] = f->keys_un[i].pt.x - static_cast<float>(ctx->bf) / d;
     }
   }
-  // Grid in CSR form: count, prefix sum, fill.
-  const int cells = FrameContext::kGridCols * FrameContext::kGridRows;
-  std::vector<int> cell_of(n, -1);
-  f->grid_start.assign(static_cast<std::size_t>(cells) + 1, 0);
-  for (std::size_t i = 0; i < n; ++i) {
-    const auto& p = f->keys_un[i].pt;
-    const int gx = static_cast<int>(std::floor((p.x - ctx->min_x) * ctx->grid_scale_x));
-    const int gy = static_cast<int>(std::floor((p.y - ctx->min_y) * ctx->grid_scale_y));
-    if (gx < 0 || gy < 0 || gx >= FrameContext::kGridCols || gy >= FrameContext::kGridRows) continue;
-    cell_of[i] = gy * FrameContext::kGridCols + gx;
-    ++f->grid_start[static_cast<std::size_t>(cell_of[i]) + 1];
-  }
-  for (int c = 0; c < cells; ++c) f->grid_start[static_cast<std::size_t>(c) + 1] += f->grid_start[static_cast<std::size_t>(c)];
-  f->grid_items.assign(static_cast<std::size_t>(f->grid_start.back()), -1);
-  std::vector<int> fill(f->grid_start.begin(), f->grid_start.end() - 1);
-  for (std::size_t i = 0; i < n; ++i)
-    if (cell_of[i] >= 0) f->grid_items[static_cast<std::size_t>(fill[static_cast<std::size_t>(cell_of[i])]++)] = static_cast<int>(i);
+  build_feature_grid(*f);
   return f;
 }
 

@@ -62,6 +62,9 @@ struct FrameFeatures {
   Eigen::Vector3d unproject(std::size_t i) const;
 };
 
+// Fills the area-query grid from keys_un (needs ctx); used when features are loaded from a file.
+void build_feature_grid(FrameFeatures& f);
+
 // Extracts ORB from `gray` and reads depth (metres, CV_32F, same size) at each keypoint.
 std::shared_ptr<const FrameFeatures> make_rgbd_features(const cv::Mat& gray, const cv::Mat& depth_m,
                                                         std::shared_ptr<const FrameContext> ctx, OrbExtractor& extractor);

@@ -41,6 +41,13 @@ class Map {
   // Thread-safe id sources.
   long next_keyframe_id() { return next_kf_id_++; }
   long next_point_id() { return next_point_id_++; }
+  // Ids continue after a loaded map's (see map_serializer.hpp).
+  long peek_next_keyframe_id() const { return next_kf_id_.load(); }
+  long peek_next_point_id() const { return next_point_id_.load(); }
+  void set_next_ids(long keyframe_id, long point_id) {
+    next_kf_id_ = keyframe_id;
+    next_point_id_ = point_id;
+  }
 
  private:
   mutable std::mutex mutex_;

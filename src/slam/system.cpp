@@ -1,6 +1,7 @@
 #include "slam/system.hpp"
 
 #include <chrono>
+#include <thread>
 
 #include <opencv2/imgproc.hpp>
 
@@ -63,6 +64,7 @@ TrackingOutcome System::track_rgbd(const cv::Mat& image, const cv::Mat& depth_m,
   Frame frame(next_frame_id_++, timestamp, std::move(features));
   TrackingOutcome out = tracker_->track(std::move(frame));
   out.keypoints = keypoints;
+  last_timestamp_ = timestamp;
   if (database_ && out.new_keyframe) {
     // The new keyframe is the reference of the frame just recorded. Its bag of words (one
     // tree descent per descriptor) measured 1.2 ms median at load 16, once per keyframe:
@@ -73,6 +75,16 @@ TrackingOutcome System::track_rgbd(const cv::Mat& image, const cv::Mat& depth_m,
     timer_.add("keyframe_bow", ms_since(t_bow));
   }
   if (!options_.mapping_thread) mapping_->run_pending();
+  // Frame records must not keep culled keyframes (and their features) alive.
+  const long culled = mapping_->stats().keyframes_culled;
+  if (culled != culled_seen_) {
+    culled_seen_ = culled;
+    tracker_->compact_records();
+    if (database_) {
+      std::lock_guard lock(map_.mutex());
+      database_->purge_bad();
+    }
+  }
   timer_.add("tracking", ms_since(t0));
   timer_.add("frame", ms_since(start));
   return out;
@@ -85,25 +97,88 @@ void System::shutdown() {
   mapping_->finish();
 }
 
+SE3 System::record_pose(const Tracker::FrameRecord& r) const {
+  // Walk up the spanning tree past culled keyframes (their pose relative to the parent was
+  // frozen when they were culled).
+  SE3 chain;  // T_cr accumulated through culled keyframes
+  const KeyFrame* kf = r.reference.get();
+  while (kf->bad && kf->parent) {
+    chain = chain * kf->T_cp;
+    kf = kf->parent.get();
+  }
+  return r.T_cr * (chain * kf->pose());
+}
+
 Trajectory System::trajectory() const {
   std::lock_guard lock(map_.mutex());
   Trajectory out;
   for (const auto& r : tracker_->records()) {
     if (!r.tracked || !r.reference) continue;
-    // Walk up the spanning tree past culled keyframes (their pose relative to the parent was
-    // frozen when they were culled).
-    SE3 T_rw;
-    SE3 chain;  // T_cr accumulated through culled keyframes
-    const KeyFrame* kf = r.reference.get();
-    while (kf->bad && kf->parent) {
-      chain = chain * kf->T_cp;
-      kf = kf->parent.get();
-    }
-    T_rw = chain * kf->pose();
-    const SE3 T_cw = r.T_cr * T_rw;
-    out.push_back({r.timestamp, T_cw.inverse()});
+    out.push_back({r.timestamp, record_pose(r).inverse()});
   }
   return out;
+}
+
+std::optional<SE3> System::last_pose() const {
+  std::lock_guard lock(map_.mutex());
+  const auto& records = tracker_->records();
+  if (records.empty() || !records.back().tracked || !records.back().reference) return std::nullopt;
+  return record_pose(records.back()).inverse();
+}
+
+std::uint64_t vocabulary_checksum(const BowVocabulary& voc) {
+  // FNV-1a over the tree (shape, word ids, weights, centres): any other vocabulary gives
+  // other bag-of-words vectors, so a map must not be used with it.
+  std::uint64_t h = 1469598103934665603ull;
+  auto mix = [&h](const void* data, std::size_t n) {
+    const auto* p = static_cast<const unsigned char*>(data);
+    for (std::size_t i = 0; i < n; ++i) h = (h ^ p[i]) * 1099511628211ull;
+  };
+  const int head[4] = {static_cast<int>(voc.kind()), voc.descriptor_cols(), voc.k(), voc.levels()};
+  mix(head, sizeof head);
+  for (std::size_t i = 0; i < voc.node_count(); ++i) {
+    const auto& n = voc.node(i);
+    mix(&n.parent, sizeof n.parent);
+    mix(&n.word, sizeof n.word);
+    mix(&n.weight, sizeof n.weight);
+    const cv::Mat c = voc.centre(i).clone();
+    mix(c.data, c.total() * c.elemSize());
+  }
+  return h == 0 ? 1 : h;  // 0 means "no vocabulary" in a map file
+}
+
+MapFileInfo System::load_map(const std::filesystem::path& path) {
+  if (next_frame_id_ != 0) throw Failure("load_map: a map can only be loaded before the first frame");
+  std::optional<std::uint64_t> checksum;
+  if (vocabulary_) checksum = vocabulary_checksum(*vocabulary_);
+  MapFileInfo info = read_map_file(path, map_, ctx_, checksum);
+  if (database_) {
+    // Bag-of-words vectors are not stored; the vocabulary in use recomputes them.
+    const auto t0 = std::chrono::steady_clock::now();
+    std::lock_guard lock(map_.mutex());
+    for (const auto& kf : map_.keyframes()) database_->add(kf);
+    timer_.add("map_bow", ms_since(t0));
+  }
+  // An empty saved map is a fresh start: tracking initializes a new one (in SLAM mode).
+  if (info.keyframes > 0) tracker_->start_lost();
+  return info;
+}
+
+MapFileInfo System::save_map(const std::filesystem::path& path) {
+  mapping_->run_pending();
+  if (options_.mapping_thread && !shut_down_) {
+    // Let the mapping thread drain its queue so the saved map holds every keyframe complete.
+    while (mapping_->queue_size() > 0 || !mapping_->accepts_keyframes())
+      std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+  return write_map_file(path, map_, *ctx_, vocabulary_ ? vocabulary_checksum(*vocabulary_) : 0);
+}
+
+void System::set_mode(Mode mode, const std::string& reason) {
+  if (mode == mode_) return;
+  mode_switches_.push_back({next_frame_id_, last_timestamp_, mode_, mode, reason});
+  mode_ = mode;
+  tracker_->set_keyframe_creation(mode == Mode::kSlam);
 }
 
 Trajectory System::keyframe_trajectory() const {

@@ -4,11 +4,22 @@
 // thread (issue 5) will be owned here too.
 //
 //   System slam(settings);
+//   slam.load_map("old.map");              // optional: extend or localize in a saved map
+//   slam.set_mode(Mode::kLocalization);    // optional, any time between frames
 //   for (...) slam.track_rgbd(bgr, depth_m, t);
 //   slam.shutdown();
 //   write_tum_trajectory("traj.txt", slam.trajectory());
+//   slam.save_map("new.map");
+//
+// Modes: in SLAM mode tracking makes keyframes and local mapping grows the map (a new one,
+// or a loaded one once tracking has relocalized in it). In localization mode no keyframe or
+// point is added: tracking only matches against the map, and local mapping, getting no
+// keyframes, finishes its queue and idles. After a map is loaded, or whenever tracking is
+// lost, each frame is relocalized (bag-of-words relocalizer when a vocabulary is loaded).
 #include <filesystem>
 #include <memory>
+#include <optional>
+#include <vector>
 
 #include <opencv2/core.hpp>
 
@@ -18,6 +29,8 @@
 #include "io/trajectory.hpp"
 #include "slam/local_mapping.hpp"
 #include "slam/map.hpp"
+#include "slam/map_serializer.hpp"
+#include "slam/mode_plan.hpp"
 #include "slam/tracking.hpp"
 
 namespace builtscene {
@@ -37,6 +50,9 @@ struct SystemOptions {
   std::filesystem::path vocabulary;
   bool relocalization = true;
 };
+
+// A fingerprint of a vocabulary, stored in saved maps (never 0).
+std::uint64_t vocabulary_checksum(const BowVocabulary& vocabulary);
 
 // The shipped ORB vocabulary: the source tree's data/vocab/orb_k10_L4.bsvoc, else the
 // installed copy; empty when neither exists.
@@ -59,6 +75,28 @@ class System {
   // Lets local mapping finish its queue and stops it. Idempotent.
   void shutdown();
 
+  // Replaces the (empty) map by a saved one; tracking then relocalizes. Only before the first
+  // frame. InputError on a bad file or a map made with another camera or vocabulary.
+  MapFileInfo load_map(const std::filesystem::path& path);
+  // Saves the map once local mapping has processed its queue (call after shutdown(), or
+  // between frames: it waits for the queue).
+  MapFileInfo save_map(const std::filesystem::path& path);
+
+  // Takes effect from the next frame. Switching to localization with no map does nothing
+  // useful (an empty map is not initialized in localization mode).
+  void set_mode(Mode mode, const std::string& reason = "api");
+  Mode mode() const { return mode_; }
+  const std::vector<ModeSwitch>& mode_switches() const { return mode_switches_; }
+  // Test hook tried before the relocalizer on lost frames (see Tracker::set_relocalization_hook).
+  void set_relocalization_hook(Tracker::RelocalizationHook hook) { tracker_->set_relocalization_hook(std::move(hook)); }
+  long first_relocalized_frame() const {  // -1: none yet
+    const auto& f = tracker_->relocalized_frames();
+    return f.empty() ? -1 : f.front();
+  }
+
+  // Camera-to-world pose of the last frame passed to track_rgbd, if it was tracked.
+  std::optional<SE3> last_pose() const;
+
   // Poses (camera in world) of every tracked frame, through its reference keyframe's final
   // pose; lost frames are left out.
   Trajectory trajectory() const;
@@ -69,6 +107,9 @@ class System {
   TrackingState state() const { return tracker_->state(); }
   StageTimer& timer() { return timer_; }
   const FrameContext& context() const { return *ctx_; }
+  std::shared_ptr<const FrameContext> context_ptr() const { return ctx_; }
+  // The map itself, for relocalizers and inspection; follow its lock rule (map.hpp).
+  Map& map() { return map_; }
 
   // Place recognition: null / empty without a vocabulary. The database is guarded by the
   // map lock (see keyframe_database.hpp).
@@ -91,6 +132,12 @@ class System {
   std::unique_ptr<Relocalizer> relocalizer_;
   long next_frame_id_ = 0;
   bool shut_down_ = false;
+  Mode mode_ = Mode::kSlam;
+  std::vector<ModeSwitch> mode_switches_;
+  double last_timestamp_ = 0;
+  long culled_seen_ = 0;
+
+  SE3 record_pose(const Tracker::FrameRecord& r) const;  // T_cw; map lock held
 };
 
 }  // namespace builtscene::slam

@@ -42,50 +42,63 @@ TrackingOutcome Tracker::track(Frame frame) {
   bool ok = false;
   bool relocalized = false;
   if (state_ == TrackingState::kNotInitialized) {
-    ok = initialize();
+    ok = keyframe_creation_ && initialize();
     out.state = state_;
     out.new_keyframe = ok;
     out.inliers = ok ? current_.matched_count() : 0;
   } else {
-    if (state_ == TrackingState::kOk) {
+    const bool was_ok = state_ == TrackingState::kOk;
+    if (was_ok) {
       update_last_frame();
       if (has_velocity_) {
         ok = track_motion_model();
         out.used_motion_model = ok;
       }
       if (!ok) ok = track_reference_keyframe();
-    } else if (relocalizer_) {
-      // Lost: look for the place in the whole map.
-      const auto start = std::chrono::steady_clock::now();
-      auto kf = relocalizer_->relocalize(current_);
-      if (timer_) timer_->add("relocalization", ms_since(start));
-      if (kf) {
-        ok = true;
-        relocalized = true;
-        reference_ = kf;
-        relocalized_frames_.push_back(current_.id);
-      }
     } else {
-      // Lost without a vocabulary: the best chance is that the camera is still near the
-      // reference keyframe; try to match it each frame.
-      ok = track_reference_keyframe();
+      current_.clear_matches();
+      if (relocalization_hook_ && relocalization_hook_(current_)) {
+        ok = relocalized = true;
+        reference_ = current_.reference;
+        relocalized_frames_.push_back(current_.id);
+      } else if (relocalizer_) {
+        // Lost: look for the place in the whole map.
+        const auto start = std::chrono::steady_clock::now();
+        auto kf = relocalizer_->relocalize(current_);
+        if (timer_) timer_->add("relocalization", ms_since(start));
+        if (kf) {
+          ok = true;
+          relocalized = true;
+          reference_ = kf;
+          relocalized_frames_.push_back(current_.id);
+        }
+      } else {
+        // Lost without a vocabulary: the best chance is that the camera is still near the
+        // reference keyframe; try to match it each frame.
+        ok = track_reference_keyframe();
+      }
     }
     current_.reference = reference_;
     if (ok) {
       const auto start = std::chrono::steady_clock::now();
       ok = track_local_map();
       if (timer_) timer_->add("local_map", ms_since(start));
+      // Localization mode keeps going on visual odometry when too few map points are in
+      // view (ORB-SLAM's mbVO); the local map is searched again on every frame.
+      if (!ok && !keyframe_creation_ && was_ok && current_.matched_count() >= 20) ok = true;
     }
     state_ = ok ? TrackingState::kOk : TrackingState::kLost;
     out.state = state_;
     out.inliers = ok ? inliers_ : 0;
     if (ok) {
       velocity_ = current_.T_cw * last_.T_cw.inverse();
-      has_velocity_ = !relocalized;  // the last frame is from before the loss: no motion to extrapolate
+      // After a loss or relocalization the last tracked frame is from another time and place:
+      // no motion to extrapolate.
+      has_velocity_ = was_ok && !relocalized;
       // Temporary (visual-odometry) matches do not count towards the map.
       for (auto& p : current_.points)
         if (p && p->observation_count() == 0) p = nullptr;
-      if (need_new_keyframe()) {
+      if (keyframe_creation_ && need_new_keyframe()) {
         create_new_keyframe();
         out.new_keyframe = true;
       }
@@ -108,6 +121,21 @@ TrackingOutcome Tracker::track(Frame frame) {
     has_last_ = true;
   }
   return out;
+}
+
+void Tracker::start_lost() {
+  reset();
+  state_ = TrackingState::kLost;
+}
+
+void Tracker::compact_records() {
+  std::lock_guard lock(map_.mutex());
+  for (auto& r : records_) {
+    while (r.reference && r.reference->bad && r.reference->parent) {
+      r.T_cr = r.T_cr * r.reference->T_cp;
+      r.reference = r.reference->parent;
+    }
+  }
 }
 
 bool Tracker::initialize() {
@@ -190,7 +218,11 @@ bool Tracker::track_motion_model() {
   }
   if (n < 20) return false;
   optimize_frame_pose(current_);
-  return discard_outliers() >= 10;
+  const int real = discard_outliers();
+  // Localization mode: where the map is thin, matches to the last frame's depth points
+  // (visual odometry) carry the pose, as in ORB-SLAM's only-tracking mode.
+  if (!keyframe_creation_) return real >= 10 || current_.matched_count() >= 20;
+  return real >= 10;
 }
 
 bool Tracker::track_reference_keyframe() {

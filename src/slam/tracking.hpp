@@ -7,6 +7,7 @@
 //
 // Ownership: the Tracker owns the current and last Frame and its per-frame records; it takes
 // the map lock for the whole of a frame's matching and optimization (see map.hpp).
+#include <functional>
 #include <memory>
 #include <vector>
 
@@ -72,6 +73,19 @@ class Tracker {
   const std::vector<FrameRecord>& records() const { return records_; }
   void reset();
 
+  // Localization mode turns keyframe creation (and so map growth) off; with it off an empty
+  // map is not initialized either.
+  void set_keyframe_creation(bool enabled) { keyframe_creation_ = enabled; }
+  bool keyframe_creation() const { return keyframe_creation_; }
+  // After a map was loaded: the next frames must be relocalized in it.
+  void start_lost();
+  // Test hook, tried before the relocalizer on every lost frame with the map lock held: on
+  // success it has set the frame's pose, matches and reference keyframe.
+  using RelocalizationHook = std::function<bool(Frame& frame)>;
+  void set_relocalization_hook(RelocalizationHook hook) { relocalization_hook_ = std::move(hook); }
+  // Re-expresses records held by culled keyframes relative to the nearest live ancestor, so
+  // the records stop keeping culled keyframes alive. Takes the map lock.
+  void compact_records();
   // When set, a lost frame is relocalized against the whole map (BoW candidates, EPnP)
   // instead of matched against the last reference keyframe only. Not owned.
   void set_relocalizer(const Relocalizer* relocalizer) { relocalizer_ = relocalizer; }
@@ -96,6 +110,8 @@ class Tracker {
   long last_kf_frame_id_ = 0;
   int inliers_ = 0;
   std::vector<FrameRecord> records_;
+  bool keyframe_creation_ = true;
+  RelocalizationHook relocalization_hook_;
   const Relocalizer* relocalizer_ = nullptr;
   std::vector<long> relocalized_frames_;
 

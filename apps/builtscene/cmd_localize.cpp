@@ -1,0 +1,153 @@
+// `builtscene localize`: localization mode in a saved map. Each frame is relocalized until
+// tracking finds the map, then tracked against it; the map does not change. Writes the
+// trajectory of the tracked frames.
+//
+// Per-frame consumers (occupancy-grid display, 2D poses, points of interest, marker
+// measurements) hook in as FrameObservers: each gets every processed frame with its index,
+// timestamp, tracked flag, camera-to-world pose and depth image, in frame order.
+#include <chrono>
+#include <fstream>
+#include <functional>
+#include <limits>
+#include <memory>
+#include <optional>
+
+#include "command_registry.hpp"
+#include "core/errors.hpp"
+#include "core/logging.hpp"
+#include "core/progress.hpp"
+#include "core/settings_file.hpp"
+#include "io/trajectory.hpp"
+#include "io/tum_dataset.hpp"
+#include "slam/system.hpp"
+
+namespace builtscene::app {
+namespace {
+
+struct LocalizeOptions {
+  std::filesystem::path dataset, camera, map, trajectory, vocabulary;
+  long max_frames = 0;
+};
+
+// One processed frame as the consumers see it.
+struct LocalizedFrame {
+  std::size_t index = 0;
+  double timestamp = 0;
+  bool tracked = false;
+  std::optional<SE3> T_wc;  // camera to world (the map's world), when tracked
+  const cv::Mat& depth;     // metres, CV_32F; empty when the depth image was unreadable
+};
+using FrameObserver = std::function<void(const LocalizedFrame&)>;
+
+nlohmann::json run_localize(const LocalizeOptions& opt) {
+  const TumDataset data = TumDataset::open(opt.dataset, opt.camera);
+  const auto camera_file = opt.camera.empty() ? opt.dataset / "camera.yaml" : opt.camera;
+  slam::SystemOptions so;
+  so.orb = OrbExtractorOptions::from_settings(SettingsFile::load(camera_file));
+  so.vocabulary = opt.vocabulary;
+  if (!opt.trajectory.empty()) {
+    std::ofstream probe(opt.trajectory, std::ios::app);
+    if (!probe) throw InputError(located(opt.trajectory, 0, "cannot write output file"));
+  }
+  slam::System system(data.settings(), so);
+  const auto load_start = std::chrono::steady_clock::now();
+  const auto info = system.load_map(opt.map);
+  system.timer().add("map_load", ms_since(load_start));
+  spdlog::info("map {}: {} keyframes, {} map points", opt.map.string(), info.keyframes, info.points);
+  system.set_mode(slam::Mode::kLocalization, "start");
+
+  // Consumers of the per-frame results; commands built on localization add theirs here.
+  std::vector<FrameObserver> observers;
+
+  const std::size_t n = opt.max_frames > 0 ? std::min<std::size_t>(data.size(), static_cast<std::size_t>(opt.max_frames))
+                                           : data.size();
+  long tracked = 0, lost = 0, unreadable_rgb = 0, bad_depth = 0, out_of_order = 0;
+  double last_timestamp = -std::numeric_limits<double>::infinity();
+  Progress progress("localize", n);
+  const auto start = std::chrono::steady_clock::now();
+  for (std::size_t i = 0; i < n; ++i) {
+    progress.update(i);
+    const auto& e = data.entry(i);
+    if (!(e.timestamp > last_timestamp)) {
+      ++out_of_order;
+      spdlog::warn("frame {}: timestamp {:.6f} not after {:.6f}; skipped", i, e.timestamp, last_timestamp);
+      continue;
+    }
+    cv::Mat rgb, depth;
+    try {
+      rgb = data.load_rgb(i);
+    } catch (const InputError& err) {
+      ++unreadable_rgb;
+      spdlog::warn("frame {}: {}; skipped", i, err.what());
+      continue;
+    }
+    try {
+      depth = data.load_depth(i);
+    } catch (const InputError& err) {
+      ++bad_depth;
+      spdlog::warn("frame {}: {}; tracked without depth", i, err.what());
+    }
+    last_timestamp = e.timestamp;
+    const auto out = system.track_rgbd(rgb, depth, e.timestamp);
+    const bool ok = out.state == slam::TrackingState::kOk;
+    if (ok) ++tracked;
+    else ++lost;
+    if (!observers.empty()) {
+      const LocalizedFrame frame{i, e.timestamp, ok, ok ? system.last_pose() : std::nullopt, depth};
+      for (const auto& observe : observers) observe(frame);
+    }
+  }
+  progress.finish();
+  const double wall_s = ms_since(start) / 1000.0;
+  system.shutdown();
+
+  const Trajectory traj = system.trajectory();
+  if (!opt.trajectory.empty()) write_tum_trajectory(opt.trajectory, traj);
+  const long processed = static_cast<long>(n) - out_of_order - unreadable_rgb;
+  nlohmann::json switches = nlohmann::json::array();
+  for (const auto& sw : system.mode_switches())
+    switches.push_back({{"frame", sw.frame}, {"from", slam::to_string(sw.from)}, {"to", slam::to_string(sw.to)},
+                        {"reason", sw.reason}});
+  nlohmann::json j = {
+      {"frames", n},
+      {"processed_frames", processed},
+      {"tracked_frames", tracked},
+      {"lost_frames", lost},
+      {"relocalizations", {{"count", system.relocalized_frames().size()}, {"frames", system.relocalized_frames()}}},
+      {"first_relocalized_frame", system.first_relocalized_frame() >= 0 ? nlohmann::json(system.first_relocalized_frame())
+                                                                         : nlohmann::json(nullptr)},
+      {"bad_input",
+       {{"unreadable_rgb", unreadable_rgb}, {"bad_depth", bad_depth}, {"timestamp_out_of_order", out_of_order}}},
+      {"map", {{"path", opt.map.string()}, {"keyframes", info.keyframes}, {"map_points", info.points}}},
+      {"keyframes_after", system.keyframe_count()},
+      {"map_points_after", system.map_point_count()},
+      {"mode_switches", switches},
+      {"fps", wall_s > 0 ? static_cast<double>(processed) / wall_s : 0.0},
+      {"wall_seconds", wall_s},
+      {"stage_ms", system.timer().summary()},
+      {"trajectory", opt.trajectory.string()},
+      {"trajectory_poses", traj.size()},
+  };
+  spdlog::info("localize: {} frames, {} tracked, {} lost, {} relocalizations, {:.1f} fps", n, tracked, lost,
+               system.relocalized_frames().size(), j["fps"].get<double>());
+  return j;
+}
+
+const bool registered = register_command({
+    .path = {"localize"},
+    .description = "Localization mode in a saved map: relocalize, then track every frame; the map is not changed",
+    .setup = [](CLI::App& cmd) -> Action {
+      auto opt = std::make_shared<LocalizeOptions>();
+      cmd.add_option("--dataset", opt->dataset, "TUM RGB-D layout folder")->required();
+      cmd.add_option("--map", opt->map, "Saved map (builtscene slam --map-out)")->required();
+      cmd.add_option("--camera", opt->camera, "Camera settings (default DATASET/camera.yaml)");
+      cmd.add_option("--trajectory", opt->trajectory, "Output: TUM trajectory of the tracked frames");
+      cmd.add_option("--max-frames", opt->max_frames, "Only the first N frames (0 = all)");
+      cmd.add_option("--vocabulary", opt->vocabulary,
+                     "Bag-of-words vocabulary (default: the shipped one; must be the map's)");
+      return [opt] { return run_localize(*opt); };
+    },
+    .order = 41});
+
+}  // namespace
+}  // namespace builtscene::app
