@@ -180,23 +180,20 @@ void OrbExtractor::describe_level(int l, std::vector<cv::KeyPoint>& kps, cv::Mat
   const cv::Mat& img = levels_[static_cast<std::size_t>(l)];
   cv::Mat blurred;
   cv::GaussianBlur(img, blurred, cv::Size(7, 7), 2, 2, cv::BORDER_REFLECT_101);
-  const auto& pattern = orb_brief_pattern();
+  const auto& table = rotated_pattern_table();
   const float scale = pyramid_.scale[static_cast<std::size_t>(l)];
   const int step = static_cast<int>(blurred.step1());
   int row = 0;
   for (auto& k : kps) {
     k.angle = orientation(img, k.pt);
-    const float a = k.angle * static_cast<float>(CV_PI / 180.0);
-    const float c = std::cos(a), s = std::sin(a);
     const std::uint8_t* center = blurred.ptr<std::uint8_t>(cvRound(k.pt.y)) + cvRound(k.pt.x);
+    const BriefPair* pairs = table.pairs(k.angle);
     std::uint8_t* d = desc.ptr<std::uint8_t>(row++);
-    for (int b = 0; b < 32; ++b) {
+    for (int b = 0; b < 32; ++b, pairs += 8) {
       std::uint8_t byte = 0;
       for (int bit = 0; bit < 8; ++bit) {
-        const BriefPair& p = pattern[static_cast<std::size_t>(b * 8 + bit)];
-        const int u1 = cvRound(p.x1 * c - p.y1 * s), v1 = cvRound(p.x1 * s + p.y1 * c);
-        const int u2 = cvRound(p.x2 * c - p.y2 * s), v2 = cvRound(p.x2 * s + p.y2 * c);
-        byte |= static_cast<std::uint8_t>((center[v1 * step + u1] < center[v2 * step + u2]) << bit);
+        const BriefPair& p = pairs[bit];
+        byte |= static_cast<std::uint8_t>((center[p.y1 * step + p.x1] < center[p.y2 * step + p.x2]) << bit);
       }
       d[b] = byte;
     }

@@ -29,6 +29,10 @@ struct TrackingOptions {
   int min_local_map_inliers = 30;
   float motion_model_radius = 15.0f;  // ORB-SLAM RGB-D
   float local_map_radius = 3.0f;
+  std::size_t recovery_keyframes = 5;
+  std::size_t max_keyframe_queue = 3;       // keyframes waiting for local mapping (ORB-SLAM)
+  std::size_t max_keyframe_queue_weak = 6;  // ... while tracking is weak
+  int weak_tracking_inliers = 100;          // below: keyframes and odometry use every depth point  // when lost: reference's neighbours and newest keyframes tried
 };
 
 enum class TrackingState { kNotInitialized, kOk, kLost };
@@ -88,12 +92,16 @@ class Tracker {
   std::vector<std::shared_ptr<MapPoint>> local_points_;
   long last_kf_frame_id_ = 0;
   int inliers_ = 0;
+  int odometry_inliers_ = 0;  // inliers to the last frame's temporary depth points
+  bool bridged_ = false;      // this frame was kept by odometry points alone (see track())
+  bool weak_ = false;         // the last tracked frame had few map inliers: map more densely
   std::vector<FrameRecord> records_;
 
   bool initialize();
   void update_last_frame();
   bool track_motion_model();
   bool track_reference_keyframe();
+  bool recover_near_reference();  // lost: the reference, then nearby and newest keyframes
   bool track_local_map();
   void update_local_map();
   int discard_outliers();  // returns matches to real map points
