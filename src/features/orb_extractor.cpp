@@ -129,22 +129,32 @@ std::vector<cv::KeyPoint> OrbExtractor::detect_level(int level) const {
     kept.push_back(k);
   }
   if (options_.min_th_fast < options_.ini_th_fast) {
+    // Adjacent weak cells of a row are scanned in one call: a FAST call has a fixed cost
+    // (threshold table, row buffers) that dominated when every 32-pixel cell paid it.
     std::vector<cv::KeyPoint> weak;
+    auto cell_x = [&](int cx) {
+      return cx == cells_x ? img.cols - kBorder : kBorder + static_cast<int>(std::floor(static_cast<float>(cx) * cw));
+    };
     for (int cy = 0; cy < cells_y; ++cy) {
-      for (int cx = 0; cx < cells_x; ++cx) {
-        if (has_strong[static_cast<std::size_t>(cy * cells_x + cx)]) continue;
-        const int cell_x0 = kBorder + static_cast<int>(std::floor(static_cast<float>(cx) * cw));
-        const int cell_y0 = kBorder + static_cast<int>(std::floor(static_cast<float>(cy) * ch));
-        const int cell_x1 = cx == cells_x - 1 ? img.cols - kBorder : kBorder + static_cast<int>(std::floor(static_cast<float>(cx + 1) * cw));
-        const int cell_y1 = cy == cells_y - 1 ? img.rows - kBorder : kBorder + static_cast<int>(std::floor(static_cast<float>(cy + 1) * ch));
-        const cv::Rect roi(cell_x0 - 3, cell_y0 - 3, cell_x1 - cell_x0 + 6, cell_y1 - cell_y0 + 6);
+      const int cell_y0 = kBorder + static_cast<int>(std::floor(static_cast<float>(cy) * ch));
+      const int cell_y1 = cy == cells_y - 1 ? img.rows - kBorder : kBorder + static_cast<int>(std::floor(static_cast<float>(cy + 1) * ch));
+      for (int cx = 0; cx < cells_x;) {
+        if (has_strong[static_cast<std::size_t>(cy * cells_x + cx)]) {
+          ++cx;
+          continue;
+        }
+        int run_end = cx + 1;
+        while (run_end < cells_x && !has_strong[static_cast<std::size_t>(cy * cells_x + run_end)]) ++run_end;
+        const int x0r = cell_x(cx), x1r = cell_x(run_end);
+        cx = run_end;
+        const cv::Rect roi(x0r - 3, cell_y0 - 3, x1r - x0r + 6, cell_y1 - cell_y0 + 6);
         weak.clear();
         cv::FAST(img(roi), weak, options_.min_th_fast, true, cv::FastFeatureDetector::TYPE_9_16);
         for (auto& k : weak) {
           k.pt.x += static_cast<float>(roi.x);
           k.pt.y += static_cast<float>(roi.y);
-          // Only the cell itself: the ring belongs to the neighbours.
-          if (k.pt.x < cell_x0 || k.pt.y < cell_y0 || k.pt.x >= cell_x1 || k.pt.y >= cell_y1) continue;
+          // Only the run's cells: the ring belongs to the neighbours.
+          if (k.pt.x < x0r || k.pt.y < cell_y0 || k.pt.x >= x1r || k.pt.y >= cell_y1) continue;
           kept.push_back(k);
         }
       }

@@ -110,7 +110,9 @@ TrackingOutcome Tracker::track(Frame frame) {
 bool Tracker::initialize() {
   int with_depth = 0;
   for (std::size_t i = 0; i < current_.size(); ++i) with_depth += current_.f->has_depth(i);
-  if (with_depth < opt_.min_init_points) return false;
+  // ORB-SLAM2 asks for 500 keypoints, not 500 with depth: looking down a long corridor most
+  // corners are beyond the sensor's range, and the map must still start there.
+  if (static_cast<int>(current_.size()) < opt_.min_init_points || with_depth < opt_.min_init_depth_points) return false;
   current_.set_pose(SE3());
   auto kf = std::make_shared<KeyFrame>(map_.next_keyframe_id(), current_);
   kf->keep = true;

@@ -20,7 +20,8 @@ class KeyFrame;
 class KeyFrameSink;
 
 struct TrackingOptions {
-  int min_init_points = 500;       // keypoints with depth needed to start a map
+  int min_init_points = 500;       // keypoints needed to start a map (ORB-SLAM2)
+  int min_init_depth_points = 100; // ... of which with depth
   int max_frames_between_kf = 30;  // ORB-SLAM: the camera fps
   int min_frames_between_kf = 0;
   int min_tracked_close = 100;     // "need close points" rule for RGB-D
