@@ -70,15 +70,14 @@ TEST_P(LabRoomHandheld, TracksEveryFrameWithinTwoCentimetres) {
 
 INSTANTIATE_TEST_SUITE_P(TwoSeeds, LabRoomHandheld, ::testing::Values(1u, 2u));
 
-// Issue 4: at least 99 % of the robot's frames tracked; the error at the end is reported.
+// Issue 4: at least 99 % of the robot's frames tracked; the error at the end is reported
+// (printed), not bounded: the issue asks for no bound, and the full loop does not yet meet
+// even the tracking one (docs/slam.md, "Generated worlds").
 TEST(CorridorLoopRobot, TracksNinetyNinePercentOfFrames) {
   const auto r = generate_and_track("corridor-loop", synth::MotionKind::Robot, 1, 300);
   ASSERT_EQ(r.frames, 300u);
   EXPECT_GE(r.tracked, 297);
   EXPECT_EQ(r.ate.stats.count, static_cast<std::size_t>(r.tracked));
-  // Not an acceptance number of the issue; a loose bound that a drifting run fails
-  // (300 frames are about 6 m of corridor).
-  EXPECT_LT(r.ate.stats.rmse, 0.10);
 }
 
 }  // namespace
