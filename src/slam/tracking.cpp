@@ -363,7 +363,9 @@ bool Tracker::need_new_keyframe() const {
   const bool c2 = (inliers_ < ref_matches * th_ref_ratio || need_close) && inliers_ > 15;
   if (!((c1a || c1b || c1c) && c2)) return false;
   if (mapping_idle || !sink_) return true;
-  sink_->interrupt_bundle_adjustment();
+  // ORB-SLAM2 interrupts local BA for every keyframe; here only when tracking is weak, so
+  // that BA still finishes when local mapping gets a fraction of a core.
+  if (weak_) sink_->interrupt_bundle_adjustment();
   // While tracking is weak a keyframe matters more than a short queue: local mapping may
   // lag (on a loaded machine) but tracking must not run out of map; the queue stays bounded.
   return sink_->queue_size() < (weak_ ? opt_.max_keyframe_queue_weak : opt_.max_keyframe_queue);
