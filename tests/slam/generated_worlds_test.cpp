@@ -34,6 +34,11 @@ WorldRun generate_and_track(const std::string& scene, synth::MotionKind motion, 
   o.out = std::filesystem::temp_directory_path() /
           ("builtscene_slam_world_" + scene + "_" + std::to_string(seed) + "_" + std::to_string(::getpid()));
   std::filesystem::remove_all(o.out);
+  // Removed on every exit, also when evaluation throws (a folder of 300 frames is 250 MB).
+  struct RemoveOnExit {
+    std::filesystem::path dir;
+    ~RemoveOnExit() { std::filesystem::remove_all(dir); }
+  } cleanup{o.out};
   synth::generate_rgbd_sequence(o);
 
   const auto data = TumDataset::open(o.out);
@@ -53,7 +58,6 @@ WorldRun generate_and_track(const std::string& scene, synth::MotionKind motion, 
   std::printf("%s seed %llu: tracked %d/%zu, keyframes %zu, ATE RMSE %.2f cm (median %.2f, max %.2f), last pose %.2f cm\n",
               scene.c_str(), static_cast<unsigned long long>(seed), r.tracked, r.frames, slam.keyframe_count(),
               100 * r.ate.stats.rmse, 100 * r.ate.stats.median, 100 * r.ate.stats.max, 100 * r.end_drift_m);
-  std::filesystem::remove_all(o.out);
   return r;
 }
 
