@@ -38,7 +38,7 @@ void BM_OrbExtractor(benchmark::State& state) {
   state.counters["keypoints"] = static_cast<double>(k.size());
   state.counters["grid_coverage"] = builtscene::grid_coverage(k, img.size(), 32, 24);
 }
-BENCHMARK(BM_OrbExtractor)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_OrbExtractor)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime();
 
 void BM_OpenCvOrb(benchmark::State& state) {
   const cv::Mat img = test_frame();
@@ -52,6 +52,6 @@ void BM_OpenCvOrb(benchmark::State& state) {
   state.counters["keypoints"] = static_cast<double>(k.size());
   state.counters["grid_coverage"] = builtscene::grid_coverage(k, img.size(), 32, 24);
 }
-BENCHMARK(BM_OpenCvOrb)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_OpenCvOrb)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime();
 
 }  // namespace

@@ -130,22 +130,32 @@ std::vector<cv::KeyPoint> OrbExtractor::detect_level(int level) const {
     kept.push_back(k);
   }
   if (options_.min_th_fast < options_.ini_th_fast) {
+    // Adjacent weak cells of a row are scanned in one call: a FAST call has a fixed cost
+    // (threshold table, row buffers) that dominated when every 32-pixel cell paid it.
     std::vector<cv::KeyPoint> weak;
+    auto cell_x = [&](int cx) {
+      return cx == cells_x ? img.cols - kBorder : kBorder + static_cast<int>(std::floor(static_cast<float>(cx) * cw));
+    };
     for (int cy = 0; cy < cells_y; ++cy) {
-      for (int cx = 0; cx < cells_x; ++cx) {
-        if (has_strong[static_cast<std::size_t>(cy * cells_x + cx)]) continue;
-        const int cell_x0 = kBorder + static_cast<int>(std::floor(static_cast<float>(cx) * cw));
-        const int cell_y0 = kBorder + static_cast<int>(std::floor(static_cast<float>(cy) * ch));
-        const int cell_x1 = cx == cells_x - 1 ? img.cols - kBorder : kBorder + static_cast<int>(std::floor(static_cast<float>(cx + 1) * cw));
-        const int cell_y1 = cy == cells_y - 1 ? img.rows - kBorder : kBorder + static_cast<int>(std::floor(static_cast<float>(cy + 1) * ch));
-        const cv::Rect roi(cell_x0 - 3, cell_y0 - 3, cell_x1 - cell_x0 + 6, cell_y1 - cell_y0 + 6);
+      const int cell_y0 = kBorder + static_cast<int>(std::floor(static_cast<float>(cy) * ch));
+      const int cell_y1 = cy == cells_y - 1 ? img.rows - kBorder : kBorder + static_cast<int>(std::floor(static_cast<float>(cy + 1) * ch));
+      for (int cx = 0; cx < cells_x;) {
+        if (has_strong[static_cast<std::size_t>(cy * cells_x + cx)]) {
+          ++cx;
+          continue;
+        }
+        int run_end = cx + 1;
+        while (run_end < cells_x && !has_strong[static_cast<std::size_t>(cy * cells_x + run_end)]) ++run_end;
+        const int x0r = cell_x(cx), x1r = cell_x(run_end);
+        cx = run_end;
+        const cv::Rect roi(x0r - 3, cell_y0 - 3, x1r - x0r + 6, cell_y1 - cell_y0 + 6);
         weak.clear();
         cv::FAST(img(roi), weak, options_.min_th_fast, true, cv::FastFeatureDetector::TYPE_9_16);
         for (auto& k : weak) {
           k.pt.x += static_cast<float>(roi.x);
           k.pt.y += static_cast<float>(roi.y);
-          // Only the cell itself: the ring belongs to the neighbours.
-          if (k.pt.x < cell_x0 || k.pt.y < cell_y0 || k.pt.x >= cell_x1 || k.pt.y >= cell_y1) continue;
+          // Only the run's cells: the ring belongs to the neighbours.
+          if (k.pt.x < x0r || k.pt.y < cell_y0 || k.pt.x >= x1r || k.pt.y >= cell_y1) continue;
           kept.push_back(k);
         }
       }
@@ -181,23 +191,20 @@ void OrbExtractor::describe_level(int l, std::vector<cv::KeyPoint>& kps, cv::Mat
   const cv::Mat& img = levels_[static_cast<std::size_t>(l)];
   cv::Mat blurred;
   cv::GaussianBlur(img, blurred, cv::Size(7, 7), 2, 2, cv::BORDER_REFLECT_101);
-  const auto& pattern = orb_brief_pattern();
+  const auto& table = rotated_pattern_table();
   const float scale = pyramid_.scale[static_cast<std::size_t>(l)];
   const int step = static_cast<int>(blurred.step1());
   int row = 0;
   for (auto& k : kps) {
     k.angle = orientation(img, k.pt);
-    const float a = k.angle * static_cast<float>(CV_PI / 180.0);
-    const float c = std::cos(a), s = std::sin(a);
     const std::uint8_t* center = blurred.ptr<std::uint8_t>(cvRound(k.pt.y)) + cvRound(k.pt.x);
+    const BriefPair* pairs = table.pairs(k.angle);
     std::uint8_t* d = desc.ptr<std::uint8_t>(row++);
-    for (int b = 0; b < 32; ++b) {
+    for (int b = 0; b < 32; ++b, pairs += 8) {
       std::uint8_t byte = 0;
       for (int bit = 0; bit < 8; ++bit) {
-        const BriefPair& p = pattern[static_cast<std::size_t>(b * 8 + bit)];
-        const int u1 = cvRound(p.x1 * c - p.y1 * s), v1 = cvRound(p.x1 * s + p.y1 * c);
-        const int u2 = cvRound(p.x2 * c - p.y2 * s), v2 = cvRound(p.x2 * s + p.y2 * c);
-        byte |= static_cast<std::uint8_t>((center[v1 * step + u1] < center[v2 * step + u2]) << bit);
+        const BriefPair& p = pairs[bit];
+        byte |= static_cast<std::uint8_t>((center[p.y1 * step + p.x1] < center[p.y2 * step + p.x2]) << bit);
       }
       d[b] = byte;
     }

@@ -42,4 +42,33 @@ const std::array<BriefPair, kBriefPairs>& orb_brief_pattern() {
   return pattern;
 }
 
+RotatedBriefTable::RotatedBriefTable() {
+  const auto& base = orb_brief_pattern();
+  for (int b = 0; b < kBins; ++b) {
+    const double a = b * (2.0 * M_PI / kBins);
+    const double c = std::cos(a), s = std::sin(a);
+    auto rot = [&](std::int8_t x, std::int8_t y, std::int8_t& u, std::int8_t& v) {
+      u = static_cast<std::int8_t>(std::lround(x * c - y * s));
+      v = static_cast<std::int8_t>(std::lround(x * s + y * c));
+    };
+    for (int i = 0; i < kBriefPairs; ++i) {
+      const BriefPair& p = base[static_cast<std::size_t>(i)];
+      BriefPair& r = rotated_[static_cast<std::size_t>(b)][static_cast<std::size_t>(i)];
+      rot(p.x1, p.y1, r.x1, r.y1);
+      rot(p.x2, p.y2, r.x2, r.y2);
+    }
+  }
+}
+
+const BriefPair* RotatedBriefTable::pairs(float angle_deg) const {
+  long bin = std::lround(angle_deg * (kBins / 360.0f)) % kBins;
+  if (bin < 0) bin += kBins;
+  return rotated_[static_cast<std::size_t>(bin)].data();
+}
+
+const RotatedBriefTable& rotated_pattern_table() {
+  static const RotatedBriefTable table;
+  return table;
+}
+
 }  // namespace builtscene

@@ -21,4 +21,21 @@ constexpr int kOrbPatchRadius = 15;
 
 const std::array<BriefPair, kBriefPairs>& orb_brief_pattern();
 
+// The pattern rotated to each whole degree and rounded to pixels, computed once: describing a
+// keypoint then costs table lookups instead of 512 rotations and roundings (about a third of
+// the extraction time before). Rounding the angle to 1 degree moves a sample point by at
+// most 0.13 px (radius 15), well under the pixel rounding every rotated pattern has anyway.
+class RotatedBriefTable {
+ public:
+  static constexpr int kBins = 360;
+  RotatedBriefTable();
+  // The pairs rotated by `angle_deg` (any value; wrapped to [0, 360)), as pixel offsets.
+  const BriefPair* pairs(float angle_deg) const;
+
+ private:
+  std::array<std::array<BriefPair, kBriefPairs>, kBins> rotated_;
+};
+
+const RotatedBriefTable& rotated_pattern_table();
+
 }  // namespace builtscene

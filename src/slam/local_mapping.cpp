@@ -73,7 +73,9 @@ void LocalMapping::insert_keyframe(std::shared_ptr<KeyFrame> kf) {
     std::lock_guard lock(queue_mutex_);
     queue_.push_back(std::move(kf));
     idle_ = false;
-    abort_ba_ = true;
+    // A new keyframe does not abort a running BA by itself; tracking asks for that when it
+    // is weak (Tracker::need_new_keyframe). Aborting on every keyframe let almost no BA
+    // finish when the machine is loaded (79 of 124 aborted on lab-room, load 9).
     std::lock_guard s(stats_mutex_);
     stats_.max_queue = std::max(stats_.max_queue, queue_.size());
   }

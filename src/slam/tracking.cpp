@@ -29,7 +29,7 @@ Tracker::Tracker(std::shared_ptr<const FrameContext> ctx, Map& map, KeyFrameSink
 
 void Tracker::reset() {
   state_ = TrackingState::kNotInitialized;
-  has_last_ = has_velocity_ = false;
+  has_last_ = has_velocity_ = weak_ = bridged_ = false;
   reference_.reset();
   local_keyframes_.clear();
   local_points_.clear();
@@ -72,21 +72,32 @@ TrackingOutcome Tracker::track(Frame frame) {
           reference_ = kf;
           relocalized_frames_.push_back(current_.id);
         }
-      } else {
-        // Lost without a vocabulary: the best chance is that the camera is still near the
-        // reference keyframe; try to match it each frame.
-        ok = track_reference_keyframe();
       }
+      // Lost and not found by the vocabulary (or none loaded): the best chance is that the
+      // camera is still near the keyframes it saw last; try them each frame.
+      if (!ok) ok = recover_near_reference();
     }
     current_.reference = reference_;
+    bridged_ = false;
     if (ok) {
       const auto start = std::chrono::steady_clock::now();
       ok = track_local_map();
       if (timer_) timer_->add("local_map", ms_since(start));
+      // Entering unmapped space faster than keyframes arrive (a fast turn, or local mapping
+      // starved of CPU) leaves too few map points in view although the frame-to-frame depth
+      // points still pin the pose down. In SLAM mode keep the pose they give and make a
+      // keyframe at once, so the map catches up instead of tracking being lost in a place it
+      // cannot recover.
+      if (!ok && keyframe_creation_ && inliers_ + odometry_inliers_ >= opt_.min_local_map_inliers &&
+          inliers_ > 0) {
+        ok = true;
+        bridged_ = true;
+      }
       // Localization mode keeps going on visual odometry when too few map points are in
       // view (ORB-SLAM's mbVO); the local map is searched again on every frame.
       if (!ok && !keyframe_creation_ && was_ok && current_.matched_count() >= 20) ok = true;
     }
+    weak_ = ok && inliers_ < opt_.weak_tracking_inliers;
     state_ = ok ? TrackingState::kOk : TrackingState::kLost;
     out.state = state_;
     out.inliers = ok ? inliers_ : 0;
@@ -141,7 +152,9 @@ void Tracker::compact_records() {
 bool Tracker::initialize() {
   int with_depth = 0;
   for (std::size_t i = 0; i < current_.size(); ++i) with_depth += current_.f->has_depth(i);
-  if (with_depth < opt_.min_init_points) return false;
+  // ORB-SLAM2 asks for 500 keypoints, not 500 with depth: looking down a long corridor most
+  // corners are beyond the sensor's range, and the map must still start there.
+  if (static_cast<int>(current_.size()) < opt_.min_init_points || with_depth < opt_.min_init_depth_points) return false;
   current_.set_pose(SE3());
   auto kf = std::make_shared<KeyFrame>(map_.next_keyframe_id(), current_);
   kf->keep = true;
@@ -180,6 +193,9 @@ void Tracker::update_last_frame() {
     if (last_.f->has_depth(i)) by_depth.emplace_back(last_.f->depth[i], i);
   std::sort(by_depth.begin(), by_depth.end());
   const SE3 T_wc = last_.T_cw.inverse();
+  // While tracking is weak every keypoint with depth helps (far depth is noisier, but the
+  // alternative is losing track in a place the map cannot bring the camera back to).
+  const int wanted = weak_ ? static_cast<int>(by_depth.size()) : opt_.new_kf_min_points;
   int n = 0;
   for (const auto& [z, i] : by_depth) {
     const auto& p = last_.points[i];
@@ -190,7 +206,7 @@ void Tracker::update_last_frame() {
       last_.outlier[i] = 0;
     }
     ++n;
-    if (z > ctx_->th_depth && n > opt_.new_kf_min_points) break;
+    if (z > ctx_->th_depth && n > wanted) break;
   }
 }
 
@@ -238,6 +254,32 @@ bool Tracker::track_reference_keyframe() {
   current_.set_pose(has_last_ ? last_.T_cw : reference_->pose());
   optimize_frame_pose(current_);
   return discard_outliers() >= 10;
+}
+
+bool Tracker::recover_near_reference() {
+  if (track_reference_keyframe()) return true;
+  // The reference alone often shares too little with the view that comes back after a
+  // blank stretch (a plain wall, a fast turn); its covisible neighbours and the newest
+  // keyframes cover the places the camera was just before.
+  std::vector<std::shared_ptr<KeyFrame>> candidates;
+  auto consider = [&](const std::shared_ptr<KeyFrame>& kf) {
+    if (!kf || kf->bad || kf == reference_) return;
+    for (const auto& c : candidates)
+      if (c == kf) return;
+    candidates.push_back(kf);
+  };
+  if (reference_)
+    for (KeyFrame* n : reference_->best_covisibles(opt_.recovery_keyframes)) consider(n->shared_from_this());
+  const auto kfs = map_.keyframes();
+  for (std::size_t k = 0; k < kfs.size() && k < static_cast<std::size_t>(opt_.recovery_keyframes); ++k)
+    consider(kfs[kfs.size() - 1 - k]);
+  const auto lost_reference = reference_;
+  for (const auto& kf : candidates) {
+    reference_ = kf;
+    if (track_reference_keyframe()) return true;
+  }
+  reference_ = lost_reference;
+  return false;
 }
 
 void Tracker::update_local_map() {
@@ -329,18 +371,24 @@ bool Tracker::track_local_map() {
   }
   search_local_points(current_, candidates, opt_.local_map_radius);
   optimize_frame_pose(current_);
-  inliers_ = 0;
+  inliers_ = odometry_inliers_ = 0;
   for (std::size_t i = 0; i < current_.points.size(); ++i) {
     const auto& p = current_.points[i];
     if (!p || current_.outlier[i]) continue;
     ++p->found;
     if (p->observation_count() > 0) ++inliers_;
+    else if (current_.f->has_depth(i)) ++odometry_inliers_;
   }
   return inliers_ >= opt_.min_local_map_inliers;
 }
 
 bool Tracker::need_new_keyframe() const {
   if (!reference_) return false;
+  if (bridged_) {
+    if (!sink_ || sink_->accepts_keyframes()) return true;
+    sink_->interrupt_bundle_adjustment();
+    return sink_->queue_size() < opt_.max_keyframe_queue_weak;
+  }
   const long since = current_.id - last_kf_frame_id_;
   const std::size_t n_kfs = map_.keyframe_count();
   const int min_obs = n_kfs <= 2 ? 2 : 3;
@@ -361,8 +409,12 @@ bool Tracker::need_new_keyframe() const {
   const bool c2 = (inliers_ < ref_matches * th_ref_ratio || need_close) && inliers_ > 15;
   if (!((c1a || c1b || c1c) && c2)) return false;
   if (mapping_idle || !sink_) return true;
-  sink_->interrupt_bundle_adjustment();
-  return sink_->queue_size() < 3;
+  // ORB-SLAM2 interrupts local BA for every keyframe; here only when tracking is weak, so
+  // that BA still finishes when local mapping gets a fraction of a core.
+  if (weak_) sink_->interrupt_bundle_adjustment();
+  // While tracking is weak a keyframe matters more than a short queue: local mapping may
+  // lag (on a loaded machine) but tracking must not run out of map; the queue stays bounded.
+  return sink_->queue_size() < (weak_ ? opt_.max_keyframe_queue_weak : opt_.max_keyframe_queue);
 }
 
 void Tracker::create_new_keyframe() {
@@ -375,6 +427,7 @@ void Tracker::create_new_keyframe() {
     if (current_.f->has_depth(i)) by_depth.emplace_back(current_.f->depth[i], i);
   std::sort(by_depth.begin(), by_depth.end());
   const SE3 T_wc = current_.T_cw.inverse();
+  const int wanted = weak_ ? static_cast<int>(by_depth.size()) : opt_.new_kf_min_points;
   int n = 0;
   for (const auto& [z, i] : by_depth) {
     if (!kf->points[i]) {
@@ -388,7 +441,7 @@ void Tracker::create_new_keyframe() {
       current_.outlier[i] = 0;
     }
     ++n;
-    if (z > ctx_->th_depth && n > opt_.new_kf_min_points) break;
+    if (z > ctx_->th_depth && n > wanted) break;
   }
   map_.add_keyframe(kf);
   reference_ = kf;

@@ -22,7 +22,8 @@ class KeyFrameSink;
 class Relocalizer;
 
 struct TrackingOptions {
-  int min_init_points = 500;       // keypoints with depth needed to start a map
+  int min_init_points = 500;       // keypoints needed to start a map (ORB-SLAM2)
+  int min_init_depth_points = 100; // ... of which with depth
   int max_frames_between_kf = 30;  // ORB-SLAM: the camera fps
   int min_frames_between_kf = 0;
   int min_tracked_close = 100;     // "need close points" rule for RGB-D
@@ -31,6 +32,10 @@ struct TrackingOptions {
   int min_local_map_inliers = 30;
   float motion_model_radius = 15.0f;  // ORB-SLAM RGB-D
   float local_map_radius = 3.0f;
+  std::size_t recovery_keyframes = 5;
+  std::size_t max_keyframe_queue = 3;       // keyframes waiting for local mapping (ORB-SLAM)
+  std::size_t max_keyframe_queue_weak = 6;  // ... while tracking is weak
+  int weak_tracking_inliers = 100;          // below: keyframes and odometry use every depth point  // when lost: reference's neighbours and newest keyframes tried
 };
 
 enum class TrackingState { kNotInitialized, kOk, kLost };
@@ -109,6 +114,9 @@ class Tracker {
   std::vector<std::shared_ptr<MapPoint>> local_points_;
   long last_kf_frame_id_ = 0;
   int inliers_ = 0;
+  int odometry_inliers_ = 0;  // inliers to the last frame's temporary depth points
+  bool bridged_ = false;      // this frame was kept by odometry points alone (see track())
+  bool weak_ = false;         // the last tracked frame had few map inliers: map more densely
   std::vector<FrameRecord> records_;
   bool keyframe_creation_ = true;
   RelocalizationHook relocalization_hook_;
@@ -119,6 +127,7 @@ class Tracker {
   void update_last_frame();
   bool track_motion_model();
   bool track_reference_keyframe();
+  bool recover_near_reference();  // lost: the reference, then nearby and newest keyframes
   bool track_local_map();
   void update_local_map();
   int discard_outliers();  // returns matches to real map points
