@@ -73,7 +73,11 @@ nlohmann::json run_slam(const SlamOptions& opt) {
   }
 
   std::optional<SlamOgmOutput> ogm;
-  if (opt.ogm.enabled()) ogm.emplace(opt.ogm, data.settings().camera);
+  if (opt.ogm.enabled()) {
+    SlamOgmOptions ogm_options = opt.ogm;
+    ogm_options.camera_height = opt.camera_height;  // one --camera-height for the region and the grid
+    ogm.emplace(ogm_options, data.settings().camera);
+  }
   slam::System system(data.settings(), so);
   nlohmann::json map_in_json = nullptr;
   if (!opt.map_in.empty()) {
@@ -223,7 +227,8 @@ const bool registered = register_command({
                      "localization outside");
       cmd.add_option("--world", opt->world, "Ground plane of --slam-region: camera (first camera, --camera-height) or zup")
           ->capture_default_str();
-      cmd.add_option("--camera-height", opt->camera_height, "With --world camera: first camera above the floor, m")
+      cmd.add_option("--camera-height", opt->camera_height,
+                     "With --world camera or --ogm-world camera: first camera above the floor, m")
           ->capture_default_str();
       cmd.add_option("--vocabulary", opt->vocabulary,
                      "Bag-of-words vocabulary for relocalization (default: the shipped data/vocab/orb_k10_L4.bsvoc)");
@@ -233,8 +238,6 @@ const bool registered = register_command({
                      "Output: occupancy grid built live from keyframes (MAP.yaml, .pgm, .state, .png)");
       cmd.add_option("--ogm-world", opt->ogm.world,
                      "Ground plane of the grid: auto (floor in the first keyframe's depth) or camera (first camera level)")
-          ->capture_default_str();
-      cmd.add_option("--camera-height", opt->ogm.camera_height, "With --ogm-world camera: first camera above the floor, m")
           ->capture_default_str();
       cmd.add_option("--ogm-every", opt->ogm.batches.full_batch_every,
                      "Rebuild the grid from all keyframes every N keyframes (0 = only after loops and at the end)")
