@@ -19,6 +19,8 @@
 #include "core/settings_file.hpp"
 #include "io/trajectory.hpp"
 #include "io/tum_dataset.hpp"
+#include "localize_outputs.hpp"
+#include "localized_frame.hpp"
 #include "slam/system.hpp"
 
 namespace builtscene::app {
@@ -27,17 +29,8 @@ namespace {
 struct LocalizeOptions {
   std::filesystem::path dataset, camera, map, trajectory, vocabulary;
   long max_frames = 0;
+  LocalizeOutputOptions outputs;
 };
-
-// One processed frame as the consumers see it.
-struct LocalizedFrame {
-  std::size_t index = 0;
-  double timestamp = 0;
-  bool tracked = false;
-  std::optional<SE3> T_wc;  // camera to world (the map's world), when tracked
-  const cv::Mat& depth;     // metres, CV_32F; empty when the depth image was unreadable
-};
-using FrameObserver = std::function<void(const LocalizedFrame&)>;
 
 nlohmann::json run_localize(const LocalizeOptions& opt) {
   const TumDataset data = TumDataset::open(opt.dataset, opt.camera);
@@ -57,7 +50,9 @@ nlohmann::json run_localize(const LocalizeOptions& opt) {
   system.set_mode(slam::Mode::kLocalization, "start");
 
   // Consumers of the per-frame results; commands built on localization add theirs here.
-  std::vector<FrameObserver> observers;
+  // The outputs open their files now, so a bad path fails before the run.
+  LocalizeOutputs outputs(opt.outputs, data.settings().camera);
+  std::vector<FrameObserver> observers{[&outputs](const LocalizedFrame& f) { outputs.observe(f); }};
 
   const std::size_t n = opt.max_frames > 0 ? std::min<std::size_t>(data.size(), static_cast<std::size_t>(opt.max_frames))
                                            : data.size();
@@ -93,7 +88,7 @@ nlohmann::json run_localize(const LocalizeOptions& opt) {
     if (ok) ++tracked;
     else ++lost;
     if (!observers.empty()) {
-      const LocalizedFrame frame{i, e.timestamp, ok, ok ? system.last_pose() : std::nullopt, depth};
+      const LocalizedFrame frame{i, e.timestamp, ok, ok ? system.last_pose() : std::nullopt, rgb, depth};
       for (const auto& observe : observers) observe(frame);
     }
   }
@@ -128,6 +123,9 @@ nlohmann::json run_localize(const LocalizeOptions& opt) {
       {"trajectory", opt.trajectory.string()},
       {"trajectory_poses", traj.size()},
   };
+  // The outputs' summaries (ogm, poi_events, markers) join the run's.
+  const auto output_summary = outputs.finish();
+  for (const auto& [key, value] : output_summary.items()) j[key] = value;
   spdlog::info("localize: {} frames, {} tracked, {} lost, {} relocalizations, {:.1f} fps", n, tracked, lost,
                system.relocalized_frames().size(), j["fps"].get<double>());
   return j;
@@ -145,6 +143,7 @@ const bool registered = register_command({
       cmd.add_option("--max-frames", opt->max_frames, "Only the first N frames (0 = all)");
       cmd.add_option("--vocabulary", opt->vocabulary,
                      "Bag-of-words vocabulary (default: the shipped one; must be the map's)");
+      opt->outputs.add_to(cmd);
       return [opt] { return run_localize(*opt); };
     },
     .order = 41});
