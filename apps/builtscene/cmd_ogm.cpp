@@ -104,7 +104,7 @@ const bool build = register_command({
       cmd.add_option("--poses", o->poses, "Trajectory, TUM format, camera in world")->required();
       cmd.add_option("--out", o->out, "Output map (MAP.yaml + MAP.pgm + MAP.state + MAP.png)")->required();
       cmd.add_flag("--keyframes-only", m.keyframes_only, "Integrate only frames that moved enough (0.2 m / 15 deg)");
-      cmd.add_option("--world", m.world, "World frame of the trajectory: zup, camera or auto")->capture_default_str();
+      cmd.add_option("--world", m.world, "Ground frame of the trajectory's world: zup, camera, auto, or a grid's MAP.yaml (the grid's frame)")->capture_default_str();
       cmd.add_option("--camera-height", m.camera_height, "With --world camera: first camera above the floor, m")->capture_default_str();
       cmd.add_option("--min-height", m.scan.min_height, "Scan band bottom above the floor, m")->capture_default_str();
       cmd.add_option("--max-height", m.scan.max_height, "Scan band top above the floor, m")->capture_default_str();

@@ -45,7 +45,7 @@ slam::ModePlan make_mode_plan(const SlamOptions& opt) {
     const Region region = Region::parse(opt.slam_region, "--slam-region");
     GroundFrame ground;
     if (!parse_ground_frame(opt.world, opt.camera_height, ground) || opt.world == "auto")
-      throw InputError("--world: '" + opt.world + "' must be zup or camera for --slam-region");
+      throw InputError("--world: '" + opt.world + "' must be zup, camera or a grid's .yaml for --slam-region");
     plan.set_region([region, ground](const SE3& T_wc) {
       const Pose2D p = ground.to_2d(T_wc);
       return region.contains({p.x, p.y});
@@ -225,7 +225,9 @@ const bool registered = register_command({
       cmd.add_option("--slam-region", opt->slam_region,
                      "SLAM mode while the camera is inside x0,y0,x1,y1 (or a polygon) on the ground plane, "
                      "localization outside");
-      cmd.add_option("--world", opt->world, "Ground plane of --slam-region: camera (first camera, --camera-height) or zup")
+      cmd.add_option("--world", opt->world,
+                     "Ground plane of --slam-region: camera (first camera, --camera-height), zup, "
+                     "or a grid's MAP.yaml (regions on that grid)")
           ->capture_default_str();
       cmd.add_option("--camera-height", opt->camera_height,
                      "With --world camera or --ogm-world camera: first camera above the floor, m")

@@ -10,6 +10,7 @@
 
 #include "core/errors.hpp"
 #include "core/logging.hpp"
+#include "ogm/map_server_io.hpp"
 
 namespace builtscene {
 
@@ -138,7 +139,14 @@ bool parse_ground_frame(const std::string& name, double camera_height, GroundFra
     return true;
   }
   if (name == "auto") return false;
-  throw InputError("--world: unknown world frame '" + name + "' (expected zup, camera or auto)");
+  // An occupancy grid's YAML: its ground frame, so regions and poses are on that grid.
+  if (name.size() > 5 && name.ends_with(".yaml")) {
+    const auto T_gw = read_ground_frame(name);
+    if (!T_gw) throw InputError(located(name, 0, "field 'ground_frame_T_gw' missing (written by slam --ogm-out and ogm build)"));
+    out = GroundFrame(*T_gw);
+    return true;
+  }
+  throw InputError("--world: unknown world frame '" + name + "' (expected zup, camera, auto or a grid's .yaml)");
 }
 
 }  // namespace builtscene

@@ -43,7 +43,8 @@ class GroundFrame {
   SE3 T_gw_;
 };
 
-// Parses --world: "zup", "camera" (with camera_height) or "auto" (needs data; returns false).
+// Parses --world: "zup", "camera" (with camera_height), a grid's YAML (its ground_frame_T_gw:
+// regions and 2D poses on that grid) or "auto" (needs data; returns false).
 bool parse_ground_frame(const std::string& name, double camera_height, GroundFrame& out);
 
 }  // namespace builtscene
