@@ -8,7 +8,6 @@
 #include <chrono>
 #include <fstream>
 #include <functional>
-#include <limits>
 #include <memory>
 #include <optional>
 
@@ -20,6 +19,7 @@
 #include "io/trajectory.hpp"
 #include "io/tum_dataset.hpp"
 #include "localize_outputs.hpp"
+#include "rgbd_frame_reader.hpp"
 #include "localized_frame.hpp"
 #include "slam/system.hpp"
 
@@ -56,39 +56,19 @@ nlohmann::json run_localize(const LocalizeOptions& opt) {
 
   const std::size_t n = opt.max_frames > 0 ? std::min<std::size_t>(data.size(), static_cast<std::size_t>(opt.max_frames))
                                            : data.size();
-  long tracked = 0, lost = 0, unreadable_rgb = 0, bad_depth = 0, out_of_order = 0;
-  double last_timestamp = -std::numeric_limits<double>::infinity();
+  long tracked = 0, lost = 0;
+  RgbdFrameReader frames(data, n);
   Progress progress("localize", n);
   const auto start = std::chrono::steady_clock::now();
-  for (std::size_t i = 0; i < n; ++i) {
-    progress.update(i);
-    const auto& e = data.entry(i);
-    if (!(e.timestamp > last_timestamp)) {
-      ++out_of_order;
-      spdlog::warn("frame {}: timestamp {:.6f} not after {:.6f}; skipped", i, e.timestamp, last_timestamp);
-      continue;
-    }
-    cv::Mat rgb, depth;
-    try {
-      rgb = data.load_rgb(i);
-    } catch (const InputError& err) {
-      ++unreadable_rgb;
-      spdlog::warn("frame {}: {}; skipped", i, err.what());
-      continue;
-    }
-    try {
-      depth = data.load_depth(i);
-    } catch (const InputError& err) {
-      ++bad_depth;
-      spdlog::warn("frame {}: {}; tracked without depth", i, err.what());
-    }
-    last_timestamp = e.timestamp;
-    const auto out = system.track_rgbd(rgb, depth, e.timestamp);
+  while (const auto f = frames.next()) {
+    progress.update(f->index);
+    const std::size_t i = f->index;
+    const auto out = system.track_rgbd(f->rgb, f->depth, f->timestamp);
     const bool ok = out.state == slam::TrackingState::kOk;
     if (ok) ++tracked;
     else ++lost;
     if (!observers.empty()) {
-      const LocalizedFrame frame{i, e.timestamp, ok, ok ? system.last_pose() : std::nullopt, rgb, depth};
+      const LocalizedFrame frame{i, f->timestamp, ok, ok ? system.last_pose() : std::nullopt, f->rgb, f->depth};
       for (const auto& observe : observers) observe(frame);
     }
   }
@@ -98,7 +78,7 @@ nlohmann::json run_localize(const LocalizeOptions& opt) {
 
   const Trajectory traj = system.trajectory();
   if (!opt.trajectory.empty()) write_tum_trajectory(opt.trajectory, traj);
-  const long processed = static_cast<long>(n) - out_of_order - unreadable_rgb;
+  const long processed = frames.delivered();
   nlohmann::json switches = nlohmann::json::array();
   for (const auto& sw : system.mode_switches())
     switches.push_back({{"frame", sw.frame}, {"from", slam::to_string(sw.from)}, {"to", slam::to_string(sw.to)},
@@ -111,8 +91,7 @@ nlohmann::json run_localize(const LocalizeOptions& opt) {
       {"relocalizations", {{"count", system.relocalized_frames().size()}, {"frames", system.relocalized_frames()}}},
       {"first_relocalized_frame", system.first_relocalized_frame() >= 0 ? nlohmann::json(system.first_relocalized_frame())
                                                                          : nlohmann::json(nullptr)},
-      {"bad_input",
-       {{"unreadable_rgb", unreadable_rgb}, {"bad_depth", bad_depth}, {"timestamp_out_of_order", out_of_order}}},
+      {"bad_input", frames.bad_input()},
       {"map", {{"path", opt.map.string()}, {"keyframes", info.keyframes}, {"map_points", info.points}}},
       {"keyframes_after", system.keyframe_count()},
       {"map_points_after", system.map_point_count()},

@@ -4,10 +4,10 @@
 // frame range (--mode-schedule) or by region on the ground plane (--slam-region).
 #include <chrono>
 #include <fstream>
-#include <limits>
 #include <memory>
 
 #include "command_registry.hpp"
+#include "rgbd_frame_reader.hpp"
 #include "core/errors.hpp"
 #include "core/logging.hpp"
 #include "core/progress.hpp"
@@ -90,38 +90,17 @@ nlohmann::json run_slam(const SlamOptions& opt) {
   system.set_mode(*start_mode, "start");
   const std::size_t n = opt.max_frames > 0 ? std::min<std::size_t>(data.size(), static_cast<std::size_t>(opt.max_frames))
                                            : data.size();
-  long tracked = 0, lost = 0, lost_events = 0, not_initialized = 0;
-  long unreadable_rgb = 0, bad_depth = 0, out_of_order = 0, no_features = 0;
-  double last_timestamp = -std::numeric_limits<double>::infinity();
+  long tracked = 0, lost = 0, lost_events = 0, not_initialized = 0, no_features = 0;
   bool was_ok = false;
+  RgbdFrameReader frames(data, n);
   Progress progress("slam", n);
   const auto start = std::chrono::steady_clock::now();
-  for (std::size_t i = 0; i < n; ++i) {
-    progress.update(i);
-    const auto& e = data.entry(i);
-    if (!(e.timestamp > last_timestamp)) {
-      ++out_of_order;
-      spdlog::warn("frame {}: timestamp {:.6f} not after {:.6f}; skipped", i, e.timestamp, last_timestamp);
-      continue;
-    }
-    cv::Mat rgb, depth;
-    try {
-      rgb = data.load_rgb(i);
-    } catch (const InputError& err) {
-      ++unreadable_rgb;
-      spdlog::warn("frame {}: {}; skipped", i, err.what());
-      continue;
-    }
-    try {
-      depth = data.load_depth(i);
-    } catch (const InputError& err) {
-      ++bad_depth;
-      spdlog::warn("frame {}: {}; tracked without depth", i, err.what());
-    }
-    last_timestamp = e.timestamp;
+  while (const auto f = frames.next()) {
+    progress.update(f->index);
+    const std::size_t i = f->index;
     if (const auto d = plan.decide(static_cast<long>(i), system.last_pose())) system.set_mode(d->mode, d->reason);
-    const auto out = system.track_rgbd(rgb, depth, e.timestamp);
-    if (ogm) ogm->after_frame(system, out, e.timestamp, depth);
+    const auto out = system.track_rgbd(f->rgb, f->depth, f->timestamp);
+    if (ogm) ogm->after_frame(system, out, f->timestamp, f->depth);
     if (out.keypoints < 20) ++no_features;
     if (out.state == slam::TrackingState::kOk) {
       ++tracked;
@@ -130,7 +109,7 @@ nlohmann::json run_slam(const SlamOptions& opt) {
       ++lost;
       if (was_ok) {
         ++lost_events;
-        spdlog::warn("frame {} ({:.6f}): tracking lost", i, e.timestamp);
+        spdlog::warn("frame {} ({:.6f}): tracking lost", i, f->timestamp);
       }
       was_ok = false;
     } else {
@@ -162,7 +141,9 @@ nlohmann::json run_slam(const SlamOptions& opt) {
   const nlohmann::json ogm_summary = ogm ? ogm->finish(system) : nlohmann::json();
   const auto stats = system.mapping_stats();
   const auto relocalized = system.relocalized_frames();
-  const long processed = static_cast<long>(n) - out_of_order - unreadable_rgb;
+  const long processed = frames.delivered();
+  nlohmann::json bad_input = frames.bad_input();
+  bad_input["no_features"] = no_features;
   const double frame_median = system.timer().median_ms("frame");
   nlohmann::json j = {
       {"frames", n},
@@ -171,11 +152,7 @@ nlohmann::json run_slam(const SlamOptions& opt) {
       {"lost_frames", lost + not_initialized},
       {"not_initialized_frames", not_initialized},
       {"lost_events", lost_events},
-      {"bad_input",
-       {{"unreadable_rgb", unreadable_rgb},
-        {"bad_depth", bad_depth},
-        {"timestamp_out_of_order", out_of_order},
-        {"no_features", no_features}}},
+      {"bad_input", bad_input},
       {"keyframes", system.keyframe_count()},
       {"map_points", system.map_point_count()},
       {"fps", wall_s > 0 ? static_cast<double>(processed) / wall_s : 0.0},
