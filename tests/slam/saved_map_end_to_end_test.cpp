@@ -15,6 +15,7 @@
 #include <nlohmann/json.hpp>
 #include <unistd.h>
 
+#include "../common/run_cli.hpp"
 #include "eval/trajectory_error.hpp"
 #include "io/tum_dataset.hpp"
 #include "slam/key_frame.hpp"
@@ -26,23 +27,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-struct CliRun {
-  int exit_code = -1;
-  std::string out;
-};
-
-CliRun run_cli(const std::string& args) {
-  const std::string cmd = std::string(BUILTSCENE_BINARY) + " " + args + " 2>/dev/null";
-  CliRun r;
-  FILE* p = popen(cmd.c_str(), "r");
-  if (!p) return r;
-  char buf[4096];
-  std::size_t n;
-  while ((n = fread(buf, 1, sizeof buf, p)) > 0) r.out.append(buf, n);
-  const int status = pclose(p);
-  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
-}
+using testing::run_cli;
 
 // BUILTSCENE_SAVED_MAP_DIR names a folder to keep (and reuse) the generated worlds in.
 const fs::path& work_dir() {

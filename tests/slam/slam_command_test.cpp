@@ -10,28 +10,14 @@
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 
+#include "../common/run_cli.hpp"
+
 namespace {
 
 namespace fs = std::filesystem;
 const fs::path kKitchen = fs::path(BUILTSCENE_SOURCE_DIR) / "../shared/data/7scenes-kitchen";
 
-struct Run {
-  int exit_code = -1;
-  std::string out;
-};
-
-Run run(const std::string& args) {
-  const std::string cmd = std::string(BUILTSCENE_BINARY) + " " + args + " 2>/dev/null";
-  Run r;
-  FILE* p = popen(cmd.c_str(), "r");
-  if (!p) return r;
-  char buf[4096];
-  std::size_t n;
-  while ((n = fread(buf, 1, sizeof buf, p)) > 0) r.out.append(buf, n);
-  const int status = pclose(p);
-  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
-}
+using builtscene::testing::run_cli;
 
 std::vector<std::string> lines_of(const fs::path& f) {
   std::ifstream in(f);
@@ -101,7 +87,7 @@ TEST_F(SlamCommand, BadInputIsCountedNotFatal) {
     for (auto& l : depth) d << l << "\n";
   }
 
-  const auto r = run("slam --dataset " + dir.string() + " --trajectory " + (dir / "traj.txt").string() + " --json");
+  const auto r = run_cli("slam --dataset " + dir.string() + " --trajectory " + (dir / "traj.txt").string() + " --json");
   ASSERT_EQ(r.exit_code, 0) << r.out;
   const auto j = nlohmann::json::parse(r.out);
   EXPECT_EQ(j["frames"], 30);
@@ -122,7 +108,7 @@ TEST_F(SlamCommand, BadInputIsCountedNotFatal) {
 TEST_F(SlamCommand, SynchronousMappingTracksAndMaps) {
   if (!fs::exists(kKitchen / "rgb.txt")) GTEST_SKIP() << "7scenes-kitchen not found at " << kKitchen;
   copy_kitchen(20);
-  const auto r = run("slam --dataset " + dir.string() + " --trajectory " + (dir / "traj.txt").string() +
+  const auto r = run_cli("slam --dataset " + dir.string() + " --trajectory " + (dir / "traj.txt").string() +
                      " --keyframes " + (dir / "kf.txt").string() + " --sync-mapping --max-frames 15 --json");
   ASSERT_EQ(r.exit_code, 0) << r.out;
   const auto j = nlohmann::json::parse(r.out);
@@ -134,7 +120,7 @@ TEST_F(SlamCommand, SynchronousMappingTracksAndMaps) {
 }
 
 TEST_F(SlamCommand, MissingDatasetIsUsageError) {
-  const auto r = run("slam --dataset " + (dir / "nope").string() + " --trajectory " + (dir / "t.txt").string());
+  const auto r = run_cli("slam --dataset " + (dir / "nope").string() + " --trajectory " + (dir / "t.txt").string());
   EXPECT_EQ(r.exit_code, 2);
 }
 
@@ -154,7 +140,7 @@ TEST_F(SlamCommand, AllBlankFramesNeverInitializeButDoNotCrash) {
   }
   rgb.close();
   depth.close();
-  const auto r = run("slam --dataset " + dir.string() + " --trajectory " + (dir / "traj.txt").string() + " --json");
+  const auto r = run_cli("slam --dataset " + dir.string() + " --trajectory " + (dir / "traj.txt").string() + " --json");
   ASSERT_EQ(r.exit_code, 0) << r.out;
   const auto j = nlohmann::json::parse(r.out);
   EXPECT_EQ(j["tracked_frames"], 0);
