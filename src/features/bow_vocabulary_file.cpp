@@ -11,6 +11,7 @@
 #include <iterator>
 #include <string>
 
+#include "core/checksum.hpp"
 #include "core/errors.hpp"
 #include "features/bow_vocabulary.hpp"
 
@@ -22,15 +23,6 @@ constexpr char kMagic[8] = {'B', 'S', 'V', 'O', 'C', 'A', 'B', '\n'};
 constexpr std::uint32_t kVersion = 1;
 
 static_assert(std::endian::native == std::endian::little, "the vocabulary file is written in native little-endian");
-
-std::uint64_t fnv1a(const char* data, std::size_t n) {
-  std::uint64_t h = 1469598103934665603ull;
-  for (std::size_t i = 0; i < n; ++i) {
-    h ^= static_cast<unsigned char>(data[i]);
-    h *= 1099511628211ull;
-  }
-  return h;
-}
 
 template <typename T>
 void put(std::string& out, T v) {
@@ -81,7 +73,7 @@ void BowVocabulary::save(const std::filesystem::path& path) const {
     put<double>(out, nodes_[i].weight);
     out.append(reinterpret_cast<const char*>(centres_.ptr(static_cast<int>(i))), row_bytes);
   }
-  put<std::uint64_t>(out, fnv1a(out.data(), out.size()));
+  put<std::uint64_t>(out, fnv1a64(out.data(), out.size()));
   std::ofstream f(path, std::ios::binary | std::ios::trunc);
   if (!f) throw InputError(located(path, 0, "cannot write vocabulary file"));
   f.write(out.data(), static_cast<std::streamsize>(out.size()));
@@ -106,7 +98,7 @@ BowVocabulary BowVocabulary::load(const std::filesystem::path& path) {
   const std::size_t body = bytes.size() - 8;
   std::uint64_t stored;
   std::memcpy(&stored, bytes.data() + body, 8);
-  if (stored != fnv1a(bytes.data(), body)) throw InputError(located(path, 0, "vocabulary file checksum mismatch (corrupt or truncated)"));
+  if (stored != fnv1a64(bytes.data(), body)) throw InputError(located(path, 0, "vocabulary file checksum mismatch (corrupt or truncated)"));
 
   Reader r(bytes, body, path);
   r.raw(magic, sizeof(magic), "magic");

@@ -6,6 +6,7 @@
 #include <fstream>
 #include <limits>
 
+#include "core/checksum.hpp"
 #include "core/errors.hpp"
 
 namespace builtscene {
@@ -15,16 +16,6 @@ double logit(double p) { return std::log(p / (1.0 - p)); }
 
 constexpr char kStateMagic[8] = {'B', 'S', 'O', 'G', 'M', 'A', 'P', '\0'};
 constexpr std::uint32_t kStateVersion = 1;
-
-// FNV-1a over the payload: detects truncation and flipped bytes.
-std::uint64_t fnv1a(const char* data, std::size_t n) {
-  std::uint64_t h = 1469598103934665603ull;
-  for (std::size_t i = 0; i < n; ++i) {
-    h ^= static_cast<unsigned char>(data[i]);
-    h *= 1099511628211ull;
-  }
-  return h;
-}
 
 template <typename T>
 void put(std::string& buf, const T& v) {
@@ -182,7 +173,7 @@ void OccupancyGridMapper::save_state(const std::filesystem::path& path) const {
   std::string file(kStateMagic, sizeof(kStateMagic));
   put(file, kStateVersion);
   put(file, static_cast<std::uint64_t>(payload.size()));
-  put(file, fnv1a(payload.data(), payload.size()));
+  put(file, fnv1a64(payload.data(), payload.size()));
   file += payload;
   // Write beside and rename, so a failed save never destroys the previous state.
   const auto tmp = path.string() + ".tmp";
@@ -207,7 +198,7 @@ OccupancyGridMapper OccupancyGridMapper::load_state(const std::filesystem::path&
   const auto size = take<std::uint64_t>(buf, pos, path);
   const auto sum = take<std::uint64_t>(buf, pos, path);
   if (buf.size() - pos != size) throw_input_error(path, 0, "map state is truncated or has trailing bytes");
-  if (fnv1a(buf.data() + pos, size) != sum) throw_input_error(path, 0, "map state checksum mismatch (corrupt file)");
+  if (fnv1a64(buf.data() + pos, size) != sum) throw_input_error(path, 0, "map state checksum mismatch (corrupt file)");
   OccupancyMapperOptions o;
   const auto model = take<std::uint32_t>(buf, pos, path);
   if (model > 1) throw_input_error(path, 0, "unknown mapping model");
