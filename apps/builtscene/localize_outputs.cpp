@@ -9,6 +9,7 @@
 
 #include "core/errors.hpp"
 #include "core/logging.hpp"
+#include "ogm/map_comparison.hpp"
 #include "ogm/map_drawing.hpp"
 #include "ogm/map_server_io.hpp"
 
@@ -19,14 +20,6 @@ std::ofstream open_output(const std::filesystem::path& path, const std::string& 
   std::ofstream f(path);
   if (!f) throw InputError(located(path, 0, "cannot write " + what));
   return f;
-}
-
-// Whether an occupied cell lies within one cell of p (the mapping tolerance).
-bool near_occupied(const OccupancyGrid& g, const Eigen::Vector2d& p) {
-  for (int dy = -1; dy <= 1; ++dy)
-    for (int dx = -1; dx <= 1; ++dx)
-      if (g.value_at({p.x() + dx * g.resolution(), p.y() + dy * g.resolution()}) >= 65) return true;
-  return false;
 }
 
 }  // namespace
@@ -92,7 +85,7 @@ void LocalizeOutputs::observe(const LocalizedFrame& f) {
         if (!last_scan_.valid(i)) continue;
         const double a = p.theta + last_scan_.beam_angle(i), r = last_scan_.ranges[i];
         ++beams;
-        on_map += near_occupied(*grid_, {p.x + r * std::cos(a), p.y + r * std::sin(a)});
+        on_map += occupied_within(*grid_, {p.x + r * std::cos(a), p.y + r * std::sin(a)}, 1);
       }
     }
     beams_ += beams;

@@ -1,13 +1,13 @@
 #include "nav/region_cloud_update.hpp"
 
 #include <cmath>
-#include <numbers>
 
 #include <opencv2/imgproc.hpp>
 
 #include "core/errors.hpp"
 #include "core/logging.hpp"
 #include "core/progress.hpp"
+#include "ogm/trajectory_mapping.hpp"
 
 namespace builtscene {
 
@@ -29,11 +29,8 @@ CloudUpdateResult update_cloud_in_region(const TumDataset& ds, const std::vector
       ++r.frames_outside_region;
       continue;
     }
-    if (last_used) {  // thin to keyframes by motion: nearby frames add only duplicates
-      const SE3 d = last_used->inverse() * f.T_gc;
-      const double angle = Eigen::AngleAxisd(d.rotation()).angle() * 180.0 / std::numbers::pi;
-      if (d.translation().norm() < o.keyframe_translation && angle < o.keyframe_rotation_deg) continue;
-    }
+    // Thin to keyframes by motion: nearby frames add only duplicates.
+    if (last_used && !moved_enough(*last_used, f.T_gc, o.keyframe_translation, o.keyframe_rotation_deg)) continue;
     cv::Mat rgb, depth;
     try {
       auto t = r.timer.scope("load");

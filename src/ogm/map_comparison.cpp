@@ -21,6 +21,10 @@ bool any_within(const OccupancyGrid& grid, const Eigen::Vector2d& p, int tol, Ma
 
 }  // namespace
 
+bool occupied_within(const OccupancyGrid& grid, const Eigen::Vector2d& p, int tolerance, MapServerThresholds t) {
+  return any_within(grid, p, tolerance, t, 1);
+}
+
 MapScore compare_maps(const OccupancyGrid& est, const OccupancyGrid& truth, int tol, MapServerThresholds t) {
   MapScore s;
   std::size_t occ_ok = 0, free_ok = 0, recalled = 0;

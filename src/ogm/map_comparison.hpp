@@ -22,4 +22,10 @@ MapScore compare_maps(const OccupancyGrid& estimate, const OccupancyGrid& truth,
                       MapServerThresholds thresholds = {});
 nlohmann::json to_json(const MapScore& s);
 
+// Whether an occupied cell (by the map_server thresholds) lies within `tolerance` cells of the
+// cell holding world point p: the mapping tolerance used by the scores above and by the check
+// of live scans against a map.
+bool occupied_within(const OccupancyGrid& grid, const Eigen::Vector2d& p, int tolerance,
+                     MapServerThresholds thresholds = {});
+
 }  // namespace builtscene

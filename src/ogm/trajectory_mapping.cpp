@@ -10,6 +10,12 @@
 
 namespace builtscene {
 
+bool moved_enough(const SE3& from, const SE3& to, double translation, double rotation_deg) {
+  const SE3 d = from.inverse() * to;
+  const double angle = Eigen::AngleAxisd(d.rotation()).angle() * 180.0 / std::numbers::pi;
+  return d.translation().norm() >= translation || angle >= rotation_deg;
+}
+
 std::vector<std::size_t> select_by_motion(const std::vector<SE3>& poses, double translation, double rotation_deg) {
   std::vector<std::size_t> keep;
   for (std::size_t i = 0; i < poses.size(); ++i) {
@@ -17,9 +23,7 @@ std::vector<std::size_t> select_by_motion(const std::vector<SE3>& poses, double 
       keep.push_back(i);
       continue;
     }
-    const SE3 d = poses[keep.back()].inverse() * poses[i];
-    const double angle = Eigen::AngleAxisd(d.rotation()).angle() * 180.0 / std::numbers::pi;
-    if (d.translation().norm() >= translation || angle >= rotation_deg) keep.push_back(i);
+    if (moved_enough(poses[keep.back()], poses[i], translation, rotation_deg)) keep.push_back(i);
   }
   return keep;
 }

@@ -49,6 +49,9 @@ GroundFrame resolve_ground_frame(const TumDataset& dataset, const PosedFrames& p
                                  double camera_height);
 
 // Frames kept when thinning by motion (the first always).
+// Whether the camera moved at least `translation` metres or turned at least `rotation_deg`
+// degrees from `from` to `to`: the rule that thins a trajectory to keyframes.
+bool moved_enough(const SE3& from, const SE3& to, double translation, double rotation_deg);
 std::vector<std::size_t> select_by_motion(const std::vector<SE3>& poses, double translation, double rotation_deg);
 
 TrajectoryMappingResult build_map_from_trajectory(const TumDataset& dataset, const Trajectory& trajectory,
