@@ -1,7 +1,7 @@
 // Demo part "ogm": a generated lab room driven by a robot; from its ground-truth poses an
 // occupancy grid (scored against the room's true map), an A* path across it, and the floor
-// markers measured and evaluated. The SLAM's own poses replace the ground truth once the
-// SLAM pillar lands in the demo.
+// markers measured and evaluated. Ground-truth poses on purpose: this part shows the mapping,
+// planning and marker chains' own error; the "slam" part builds a grid from the SLAM's poses.
 #include <fstream>
 #include <iomanip>
 #include <sstream>

@@ -1,0 +1,56 @@
+#!/usr/bin/env bash
+# The source's corridor experiment (issue 7 acceptance), on the generated 80 m basement corridor
+# with 15 surveyed floor tags: a map built in SLAM mode on one robot loop, then LOOPS loops of
+# another seed in localization mode logging every tag measurement, then `eval markers` against
+# the survey (Tables 2.1 and 2.2 of the source: per-marker position RMSE, consecutive distances).
+#   bench/markers_corridor.sh [WORKDIR]     (default /tmp/builtscene-markers-corridor)
+# Environment: LOOPS (5), NOISE (kinect | none), MAP_SEED (1), RUN_SEED (2).
+# Output: WORKDIR/eval/markers.md, .csv tables, markers.png; bench-out/markers_corridor.json
+# (slam, localize and eval summaries) and a line per stage on stderr.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+BIN=${BIN:-build/release/apps/builtscene/builtscene}
+WORK=${1:-/tmp/builtscene-markers-corridor}
+LOOPS=${LOOPS:-5}
+NOISE=${NOISE:-kinect}
+MAP_SEED=${MAP_SEED:-1}
+RUN_SEED=${RUN_SEED:-2}
+mkdir -p "$WORK" bench-out
+map_run="$WORK/map-$NOISE-$MAP_SEED"
+loc_run="$WORK/loc-$NOISE-$RUN_SEED-$LOOPS"
+[ -f "$map_run/rgb.txt" ] || "$BIN" -q synth rgbd --scene corridor-loop --motion robot --loops 1 \
+  --noise "$NOISE" --seed "$MAP_SEED" --out "$map_run"
+[ -f "$loc_run/rgb.txt" ] || "$BIN" -q synth rgbd --scene corridor-loop --motion robot --loops "$LOOPS" \
+  --noise "$NOISE" --seed "$RUN_SEED" --out "$loc_run"
+echo "markers_corridor: SLAM on one loop ($(wc -l < "$map_run/groundtruth.txt") poses)" >&2
+"$BIN" -q slam --dataset "$map_run" --trajectory "$WORK/map_traj.txt" --map-out "$WORK/corridor.bsmap" \
+  --ogm-out "$WORK/grid" --json > "$WORK/slam.json"
+"$BIN" -q eval ate --gt "$map_run/groundtruth.txt" --est "$WORK/map_traj.txt" --json > "$WORK/slam_ate.json" || true
+echo "markers_corridor: localization over $LOOPS loops" >&2
+"$BIN" -q localize --dataset "$loc_run" --map "$WORK/corridor.bsmap" --trajectory "$WORK/loc_traj.txt" \
+  --markers-out "$WORK/measured.csv" --sizes-from "$loc_run/markers.csv" --json > "$WORK/localize.json"
+status=0
+"$BIN" -q eval markers --measured "$WORK/measured.csv" --truth "$loc_run/markers.csv" --align 2d \
+  --out "$WORK/eval" --json > "$WORK/eval.json" || status=$?
+python3 - "$WORK" "$status" <<'PY' > bench-out/markers_corridor.json
+import json, sys, os
+w, status = sys.argv[1], int(sys.argv[2])
+load = lambda n: json.load(open(os.path.join(w, n))) if os.path.getsize(os.path.join(w, n)) else None
+slam, loc, ev = load("slam.json"), load("localize.json"), (load("eval.json") if status == 0 else None)
+ate = load("slam_ate.json") if os.path.exists(os.path.join(w, "slam_ate.json")) else None
+out = {"slam": {k: slam[k] for k in ("frames", "tracked_frames", "keyframes", "fps")},
+       "slam_ate_rmse": ate["rmse"] if ate else None,
+       "localize": {k: loc[k] for k in ("frames", "tracked_frames", "fps")},
+       "markers_measured": loc.get("markers", {}).get("ids"),
+       "eval": ev, "eval_exit": status}
+print(json.dumps(out, indent=1))
+s = sys.stderr
+print("markers_corridor: SLAM tracked %d/%d (ATE %s), localization tracked %d/%d at %.1f fps, tags measured %s" % (
+    slam["tracked_frames"], slam["frames"], "%.3f m" % ate["rmse"] if ate else "n/a", loc["tracked_frames"],
+    loc["frames"], loc["fps"], out["markers_measured"]), file=s)
+if ev:
+    print("markers_corridor: max position RMSE %.3f m, max distance RMSE %.3f m, unseen %s" % (
+        ev["max_rmse"], ev["max_distance_rmse"], ev.get("unseen_ids")), file=s)
+else:
+    print("markers_corridor: eval markers failed (exit %d): too few tags measured" % status, file=s)
+PY
