@@ -53,7 +53,9 @@ const bool registered = register_command({
       cmd.add_option("--dataset", o->dataset, "TUM-layout RGB-D folder")->required();
       cmd.add_option("--camera", o->camera, "Camera settings (default DATASET/camera.yaml)");
       cmd.add_option("--poses", o->poses, "Trajectory (TUM format) of the dataset's frames")->required();
-      cmd.add_option("--world", o->world, "Ground frame of the trajectory's world: zup, camera, auto, or a grid's MAP.yaml (the grid's frame)")->capture_default_str();
+      cmd.add_option("--world", o->world,
+                     "Ground frame of the trajectory's world: zup, camera, auto, or a grid's MAP.yaml (the grid's frame)")
+          ->capture_default_str();
       cmd.add_option("--camera-height", o->camera_height, "With --world camera: first camera above the floor, m");
       cmd.add_option("--region", o->region, "x0,y0,x1,y1 or a polygon x0,y0,x1,y1,x2,y2,... on the map");
       cmd.add_option("--cloud-in", o->cloud_in, "Existing cloud whose points inside the region are replaced");

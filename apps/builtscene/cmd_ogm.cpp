@@ -1,8 +1,7 @@
 // `builtscene ogm build`: an occupancy grid map from a dataset and a trajectory;
 // `builtscene ogm compare`: score a map against a ground-truth map.
+#include <cstdio>
 #include <memory>
-
-#include <opencv2/imgcodecs.hpp>
 
 #include "command_registry.hpp"
 #include "core/errors.hpp"
@@ -17,6 +16,7 @@ namespace {
 
 struct BuildOptions {
   std::string dataset, camera, poses, out, truth, png, model = "source";
+  std::filesystem::path frame_images;
   TrajectoryMappingOptions mapping;
 };
 
@@ -32,6 +32,17 @@ nlohmann::json run_build(BuildOptions o) {
   else throw InputError("--model: unknown model '" + o.model + "' (expected source or inverse-sensor)");
   const TumDataset ds = TumDataset::open(o.dataset, o.camera);
   const Trajectory traj = read_tum_trajectory(o.poses);
+  if (!o.frame_images.empty()) {
+    std::error_code ec;
+    std::filesystem::create_directories(o.frame_images, ec);
+    if (ec) throw InputError(located(o.frame_images, 0, "cannot create the folder: " + ec.message()));
+    // The grid as it grows, one picture per integrated frame (the source's per-keyframe figures).
+    o.mapping.after_frame = [dir = o.frame_images](const TrajectoryMappingResult& so_far) {
+      char name[32];
+      std::snprintf(name, sizeof name, "frame_%06zu.png", so_far.frames.back());
+      write_track_picture(dir / name, so_far.mapper.grid(), so_far.poses, &so_far.last_scan);
+    };
+  }
   const TrajectoryMappingResult r = build_map_from_trajectory(ds, traj, o.mapping);
   const OccupancyGrid grid = r.mapper.grid();
   const auto yaml = yaml_path(o.out);
@@ -41,15 +52,7 @@ nlohmann::json run_build(BuildOptions o) {
   state.replace_extension(".state");
   r.mapper.save_state(state);
   const std::string png = o.png.empty() ? (std::filesystem::path(yaml).replace_extension(".png")).string() : o.png;
-  {
-    MapDrawing d(grid, 2);
-    d.trajectory(r.poses);
-    if (!r.poses.empty()) {
-      d.scan(r.poses.back(), r.last_scan);
-      d.robot(r.poses.back());
-    }
-    if (!cv::imwrite(png, d.image())) throw Failure(located(png, 0, "cannot write picture"));
-  }
+  write_track_picture(png, grid, r.poses, &r.last_scan);
   const auto& Tg = r.frame.T_gw();
   nlohmann::json j = {{"map", yaml.string()},
                       {"state", state.string()},
@@ -104,7 +107,9 @@ const bool build = register_command({
       cmd.add_option("--poses", o->poses, "Trajectory, TUM format, camera in world")->required();
       cmd.add_option("--out", o->out, "Output map (MAP.yaml + MAP.pgm + MAP.state + MAP.png)")->required();
       cmd.add_flag("--keyframes-only", m.keyframes_only, "Integrate only frames that moved enough (0.2 m / 15 deg)");
-      cmd.add_option("--world", m.world, "Ground frame of the trajectory's world: zup, camera, auto, or a grid's MAP.yaml (the grid's frame)")->capture_default_str();
+      cmd.add_option("--world", m.world,
+                     "Ground frame of the trajectory's world: zup, camera, auto, or a grid's MAP.yaml (the grid's frame)")
+          ->capture_default_str();
       cmd.add_option("--camera-height", m.camera_height, "With --world camera: first camera above the floor, m")->capture_default_str();
       cmd.add_option("--min-height", m.scan.min_height, "Scan band bottom above the floor, m")->capture_default_str();
       cmd.add_option("--max-height", m.scan.max_height, "Scan band top above the floor, m")->capture_default_str();
@@ -113,6 +118,8 @@ const bool build = register_command({
       cmd.add_option("--model", o->model, "Update model: source or inverse-sensor")->capture_default_str();
       cmd.add_option("--truth", o->truth, "Ground-truth map_server YAML to score against");
       cmd.add_option("--png", o->png, "Picture (default MAP.png)");
+      cmd.add_option("--frame-images", o->frame_images,
+                     "Output folder: a picture of the grid after each integrated frame (frame_NNNNNN.png)");
       return [o] { return run_build(*o); };
     },
     .order = 30});

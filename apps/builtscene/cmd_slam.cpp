@@ -218,6 +218,8 @@ const bool registered = register_command({
       cmd.add_option("--ogm-world", opt->ogm.world,
                      "Ground plane of the grid: auto (floor in the first keyframe's depth) or camera (first camera level)")
           ->capture_default_str();
+      cmd.add_option("--ogm-frames", opt->ogm.frames,
+                     "Output folder: a picture of the grid after each keyframe (keyframe_NNNNN.png)");
       cmd.add_option("--ogm-every", opt->ogm.batches.full_batch_every,
                      "Rebuild the grid from all keyframes every N keyframes (0 = only after loops and at the end)")
           ->capture_default_str()

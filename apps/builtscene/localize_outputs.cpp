@@ -5,7 +5,6 @@
 #include <iomanip>
 
 #include <CLI/CLI.hpp>
-#include <opencv2/imgcodecs.hpp>
 
 #include "core/errors.hpp"
 #include "core/logging.hpp"
@@ -128,13 +127,7 @@ nlohmann::json LocalizeOutputs::finish() {
                 {"beams_on_map", beams_ > 0 ? static_cast<double>(beams_on_map_) / static_cast<double>(beams_) : 0.0}};
     if (!options_.poses2d.empty()) j["ogm"]["poses2d"] = options_.poses2d.string();
     if (!options_.ogm_png.empty()) {
-      MapDrawing d(*grid_, 2);
-      d.trajectory(track_);
-      if (!track_.empty()) {
-        d.scan(track_.back(), last_scan_);
-        d.robot(track_.back());
-      }
-      if (!cv::imwrite(options_.ogm_png.string(), d.image())) throw Failure(located(options_.ogm_png, 0, "cannot write picture"));
+      write_track_picture(options_.ogm_png, *grid_, track_, &last_scan_);
       j["ogm"]["png"] = options_.ogm_png.string();
     }
   }

@@ -1,9 +1,9 @@
 #include "slam_ogm_output.hpp"
 
 #include <chrono>
+#include <cstdio>
 #include <fstream>
 
-#include <opencv2/imgcodecs.hpp>
 
 #include "core/errors.hpp"
 #include "core/logging.hpp"
@@ -24,6 +24,11 @@ SlamOgmOutput::SlamOgmOutput(SlamOgmOptions options, const PinholeCamera& camera
     std::ofstream f(probe, std::ios::app);
     if (!f) throw InputError(located(probe, 0, "cannot write the occupancy grid"));
   }
+  if (!options_.frames.empty()) {
+    std::error_code ec;
+    std::filesystem::create_directories(options_.frames, ec);
+    if (ec) throw InputError(located(options_.frames, 0, "cannot create the folder: " + ec.message()));
+  }
 }
 
 void SlamOgmOutput::consume(const PosesAndLaserScans& batch) {
@@ -37,6 +42,7 @@ void SlamOgmOutput::consume(const PosesAndLaserScans& batch) {
     for (const auto& p : batch.pairs) keyframe_poses_.push_back(p.pose);
   } else {
     keyframe_poses_.push_back(batch.pairs.front().pose);
+    last_scan_ = batch.pairs.front().scan;
   }
 }
 
@@ -62,6 +68,11 @@ void SlamOgmOutput::after_frame(slam::System& system, const slam::TrackingOutcom
     emitter_.emplace(camera_, ground, options_.batches);
   }
   for (const auto& batch : emitter_->add_keyframe(timestamp, kf->pose, depth, keyframes)) consume(batch);
+  if (!options_.frames.empty()) {
+    char name[32];
+    std::snprintf(name, sizeof name, "keyframe_%05ld.png", keyframes_drawn_++);
+    write_track_picture(options_.frames / name, mapper_.grid(), keyframe_poses_, &last_scan_);
+  }
   system.timer().add("ogm", ms_since(start));
 }
 
@@ -85,10 +96,7 @@ nlohmann::json SlamOgmOutput::finish(slam::System& system) {
   save_map_server(grid, yaml);
   append_ground_frame(yaml, emitter_->ground().T_gw());  // so `localize --ogm` can put poses on it
   mapper_.save_state(state);
-  MapDrawing d(grid, 2);
-  d.trajectory(keyframe_poses_);
-  if (!keyframe_poses_.empty()) d.robot(keyframe_poses_.back());
-  if (!cv::imwrite(png.string(), d.image())) throw Failure(located(png, 0, "cannot write picture"));
+  write_track_picture(png, grid, keyframe_poses_);
   const auto& T = emitter_->ground().T_gw();
   j["map"] = yaml.string();
   j["state"] = state.string();

@@ -24,7 +24,8 @@ struct SlamOgmOptions {
   double camera_height = 1.0;      // world = camera: first camera above the floor, m
   PosesAndLaserScansOptions batches;
   std::string lcm_url;             // empty: no LCM
-  bool enabled() const { return !out.empty() || !lcm_url.empty(); }
+  std::filesystem::path frames;    // folder for a picture of the grid after each keyframe (empty: none)
+  bool enabled() const { return !out.empty() || !lcm_url.empty() || !frames.empty(); }
 };
 
 class SlamOgmOutput {
@@ -44,7 +45,8 @@ class SlamOgmOutput {
   OccupancyGridMapper mapper_;
   std::unique_ptr<LcmPublisher> lcm_;
   std::vector<Pose2D> keyframe_poses_;
-  long batches_ = 0, full_batches_ = 0;
+  long batches_ = 0, full_batches_ = 0, keyframes_drawn_ = 0;
+  LaserScan last_scan_;
 
   void consume(const PosesAndLaserScans& batch);
 };

@@ -2,8 +2,10 @@
 
 #include <cmath>
 
+#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "core/errors.hpp"
 #include "ogm/map_server_io.hpp"
 
 namespace builtscene {
@@ -53,6 +55,17 @@ void MapDrawing::scan(const Pose2D& p, const LaserScan& s, const cv::Scalar& bgr
 
 void MapDrawing::circle(const Eigen::Vector2d& p, double radius_m, const cv::Scalar& bgr) {
   cv::circle(image_, to_pixel(p), std::max(2, static_cast<int>(radius_m / grid_.resolution() * scale_)), bgr, 2, cv::LINE_AA);
+}
+
+void write_track_picture(const std::filesystem::path& png, const OccupancyGrid& grid, const std::vector<Pose2D>& track,
+                         const LaserScan* last_scan, int scale) {
+  MapDrawing d(grid, scale);
+  d.trajectory(track);
+  if (!track.empty()) {
+    if (last_scan) d.scan(track.back(), *last_scan);
+    d.robot(track.back());
+  }
+  if (!cv::imwrite(png.string(), d.image())) throw Failure(located(png, 0, "cannot write picture"));
 }
 
 }  // namespace builtscene

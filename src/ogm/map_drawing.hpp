@@ -2,6 +2,7 @@
 // Pictures of an occupancy grid in the style of the source's figures: free white, occupied
 // black, unknown grey, the trajectory in blue, the robot as a red isosceles triangle with its
 // apex along the heading, and the scan beams in green.
+#include <filesystem>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -31,5 +32,10 @@ class MapDrawing {
   cv::Mat image_;
   cv::Point to_pixel(const Eigen::Vector2d& p) const;
 };
+
+// The usual picture of a mapping run: the grid, the track, the last pose as the robot and, when
+// given, its scan; written as PNG. Failure naming the file when it cannot be written.
+void write_track_picture(const std::filesystem::path& png, const OccupancyGrid& grid, const std::vector<Pose2D>& track,
+                         const LaserScan* last_scan = nullptr, int scale = 2);
 
 }  // namespace builtscene

@@ -101,6 +101,7 @@ TrajectoryMappingResult build_map_from_trajectory(const TumDataset& ds, const Tr
     r.poses.push_back(p);
     r.frames.push_back(fi);
     r.last_scan = std::move(scan);
+    if (o.after_frame) o.after_frame(r);
     progress.update(k + 1);
   }
   return r;

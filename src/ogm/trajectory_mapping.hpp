@@ -3,6 +3,7 @@
 // SLAM's), so mapping can be used and tested apart from the SLAM: poses are associated with
 // frames by timestamp, optionally thinned to keyframes by motion, put in the ground frame,
 // and each frame's virtual scan is integrated.
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -24,6 +25,8 @@ struct TrajectoryMappingOptions {
   double keyframe_translation = 0.20;  // metres
   double keyframe_rotation_deg = 15.0;
   double max_difference = 0.02;      // seconds, pose-to-frame association
+  // Called after each integrated frame with the result so far (e.g. to draw the grid as it grows).
+  std::function<void(const struct TrajectoryMappingResult&)> after_frame;
 };
 
 struct TrajectoryMappingResult {
@@ -48,10 +51,10 @@ PosedFrames associate_poses(const TumDataset& dataset, const Trajectory& traject
 GroundFrame resolve_ground_frame(const TumDataset& dataset, const PosedFrames& posed, const std::string& world,
                                  double camera_height);
 
-// Frames kept when thinning by motion (the first always).
 // Whether the camera moved at least `translation` metres or turned at least `rotation_deg`
 // degrees from `from` to `to`: the rule that thins a trajectory to keyframes.
 bool moved_enough(const SE3& from, const SE3& to, double translation, double rotation_deg);
+// Frames kept when thinning by motion (the first always).
 std::vector<std::size_t> select_by_motion(const std::vector<SE3>& poses, double translation, double rotation_deg);
 
 TrajectoryMappingResult build_map_from_trajectory(const TumDataset& dataset, const Trajectory& trajectory,

@@ -1,12 +1,16 @@
 // The occupancy grid on a generated world against the world's own geometry (label: slow).
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include <cmath>
 #include <unistd.h>
 
 #include <fstream>
 
 #include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
 
 #include "../common/run_cli.hpp"
 #include "ogm/map_server_io.hpp"
@@ -88,10 +92,33 @@ void check_desk_tops() {
   EXPECT_LE(one_hits, 2) << "of " << cells << " cells under desk tops";
 }
 
-// One test: both checks share one generated lab room (generating it takes most of the time).
+// --frame-images: one picture per integrated frame, named by its dataset frame; the last one
+// shows the final grid, so it equals the map's own picture pixel for pixel.
+void check_frame_images() {
+  const auto out = fs::temp_directory_path() / ("bs_ogm_lab_frames_" + std::to_string(::getpid()));
+  const auto dir = fs::temp_directory_path() / ("bs_ogm_lab_frames_dir_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  const auto j = build(out, "--frame-images " + shell_quote(dir));
+  ASSERT_TRUE(j.contains("scans"));
+  std::vector<fs::path> pictures;
+  for (const auto& e : fs::directory_iterator(dir)) pictures.push_back(e.path());
+  std::sort(pictures.begin(), pictures.end());
+  ASSERT_EQ(pictures.size(), j["scans"].get<std::size_t>());
+  EXPECT_EQ(pictures.front().filename(), "frame_000000.png");  // the first frame is always used
+  const cv::Mat last = cv::imread(pictures.back().string()), final_map = cv::imread(j["png"].get<std::string>());
+  ASSERT_FALSE(last.empty());
+  ASSERT_EQ(last.size(), final_map.size());
+  EXPECT_EQ(cv::norm(last, final_map, cv::NORM_INF), 0.0);
+  const cv::Mat first = cv::imread(pictures.front().string());
+  EXPECT_LT(first.total(), last.total()) << "the grid grows as frames arrive";
+  fs::remove_all(dir);
+}
+
+// One test: the checks share one generated lab room (generating it takes most of the time).
 TEST(OgmGenerated, LabRoomMapMatchesTheTrueMapAndSeesDeskTopsThatOneHeightMisses) {
   check_map_scores();
   check_desk_tops();
+  check_frame_images();
   fs::remove_all(lab_room());
 }
 

@@ -34,7 +34,7 @@ TEST(SlamOgmCli, LiveGridLandsOnTheTruthMapAndEveryBatchIsPublished) {
   auto r = run_cli("synth rgbd --scene lab-room --frames 200 --seed 4 --out " + shell_quote(d / "seq"));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   r = run_cli("slam --json --sync-mapping --dataset " + shell_quote(d / "seq") + " --trajectory " + shell_quote(d / "t.txt") +
-              " --keyframes " + shell_quote(d / "kf.txt") + " --ogm-out " + shell_quote(d / "map") + " --ogm-every 5 --lcm " +
+              " --keyframes " + shell_quote(d / "kf.txt") + " --ogm-out " + shell_quote(d / "map") + " --ogm-every 5 --ogm-frames " + shell_quote(d / "frames") + " --lcm " +
               shell_quote("file://" + (d / "live.lcmlog").string() + "?mode=w"));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto slam = nlohmann::json::parse(r.out);
@@ -89,6 +89,10 @@ TEST(SlamOgmCli, LiveGridLandsOnTheTruthMapAndEveryBatchIsPublished) {
   EXPECT_TRUE(last.full);
   EXPECT_EQ(static_cast<std::size_t>(last.num_keyframes), read_tum_trajectory(d / "kf.txt").size());
   EXPECT_EQ(slam["keyframes"].get<std::size_t>(), read_tum_trajectory(d / "kf.txt").size());
+  // --ogm-frames: one picture per keyframe batch of one (the full rebuilds draw none).
+  std::size_t pictures = 0;
+  for (const auto& e : fs::directory_iterator(d / "frames")) pictures += e.path().extension() == ".png";
+  EXPECT_EQ(static_cast<int>(pictures), ogm["batches"].get<int>() - ogm["full_batches"].get<int>());
   fs::remove_all(d);
 }
 
