@@ -4,6 +4,7 @@
 #include <random>
 
 #include "slam/rigid_transform.hpp"
+#include "slam/rigid_transform_ransac.hpp"
 
 using builtscene::slam::fit_rigid_transform;
 
@@ -30,4 +31,38 @@ TEST(RigidTransform, RejectsTooFewOrCollinearPoints) {
   EXPECT_FALSE(fit_rigid_transform(two, two).has_value());
   std::vector<Eigen::Vector3d> line{{0, 0, 0}, {1, 0, 0}, {2, 0, 0}, {3, 0, 0}};
   EXPECT_FALSE(fit_rigid_transform(line, line).has_value());
+}
+
+TEST(RigidTransformRansac, RecoversTransformAndOutliersFromContaminatedPairs) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-4.0, 4.0);
+  std::normal_distribution<double> noise(0.0, 0.005);
+  Eigen::Isometry3d truth = Eigen::Isometry3d::Identity();
+  truth.linear() = Eigen::AngleAxisd(-1.1, Eigen::Vector3d(1.0, 0.2, 0.5).normalized()).toRotationMatrix();
+  truth.translation() = Eigen::Vector3d(-2.0, 0.3, 1.0);
+  std::vector<Eigen::Vector3d> src, dst;
+  std::vector<bool> is_outlier;
+  for (int i = 0; i < 100; ++i) {
+    src.emplace_back(u(rng), u(rng), u(rng));
+    const bool outlier = i % 5 < 2;  // 40 % wrong matches
+    is_outlier.push_back(outlier);
+    dst.push_back(outlier ? Eigen::Vector3d(u(rng), u(rng), u(rng))
+                          : Eigen::Vector3d(truth * src.back() + Eigen::Vector3d(noise(rng), noise(rng), noise(rng))));
+  }
+  const auto fit = builtscene::slam::ransac_rigid_transform(src, dst, 0.05, 40, 200, 3);
+  ASSERT_TRUE(fit.has_value());
+  EXPECT_LT((fit->transform.linear() - truth.linear()).norm(), 5e-3);
+  EXPECT_LT((fit->transform.translation() - truth.translation()).norm(), 5e-3);
+  for (std::size_t i = 0; i < src.size(); ++i) EXPECT_EQ(fit->inliers[i], !is_outlier[i]) << i;
+}
+
+TEST(RigidTransformRansac, RejectsUnrelatedPointSets) {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-4.0, 4.0);
+  std::vector<Eigen::Vector3d> src, dst;
+  for (int i = 0; i < 60; ++i) {
+    src.emplace_back(u(rng), u(rng), u(rng));
+    dst.emplace_back(u(rng), u(rng), u(rng));
+  }
+  EXPECT_FALSE(builtscene::slam::ransac_rigid_transform(src, dst, 0.05, 20, 200, 3).has_value());
 }
