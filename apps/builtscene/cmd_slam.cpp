@@ -168,6 +168,7 @@ nlohmann::json run_slam(const SlamOptions& opt) {
         {"bundle_adjustments_aborted", stats.bundle_adjustments_aborted},
         {"max_queue", stats.max_queue}}},
       {"relocalizations", {{"count", relocalized.size()}, {"frames", relocalized}}},
+      {"depth_odometry_frames", system.depth_odometry_frames()},
       {"vocabulary", system.vocabulary() ? so.vocabulary.empty() ? slam::default_vocabulary_path().string() : so.vocabulary.string() : ""},
       {"mode_switches", switches},
       {"map_in", map_in_json},

@@ -62,6 +62,7 @@ TrackingOutcome System::track_rgbd(const cv::Mat& image, const cv::Mat& depth_m,
   const auto t0 = std::chrono::steady_clock::now();
   const int keypoints = static_cast<int>(features->size());
   Frame frame(next_frame_id_++, timestamp, std::move(features));
+  tracker_->set_images(gray, depth_m);
   TrackingOutcome out = tracker_->track(std::move(frame));
   out.keypoints = keypoints;
   last_timestamp_ = timestamp;

@@ -117,6 +117,8 @@ class System {
   std::shared_ptr<const BowVocabulary> vocabulary() const { return vocabulary_; }
   // Frame ids (0-based count of frames passed to track_rgbd) where relocalization succeeded.
   std::vector<long> relocalized_frames() const { return tracker_->relocalized_frames(); }
+  // Frames whose pose came from RGB-D odometry because features could not hold it.
+  long depth_odometry_frames() const { return tracker_->depth_odometry_frames(); }
 
  private:
   RgbdCameraSettings settings_;

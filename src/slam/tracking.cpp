@@ -97,6 +97,15 @@ TrackingOutcome Tracker::track(Frame frame) {
       // view (ORB-SLAM's mbVO); the local map is searched again on every frame.
       if (!ok && !keyframe_creation_ && was_ok && current_.matched_count() >= 20) ok = true;
     }
+    // Features could not hold the pose (a plain wall in view) but the depth image still shows
+    // wall and floor: take the pose from RGB-D odometry against the last frame; in SLAM mode
+    // make a keyframe at once, so new map points from depth are there when texture returns.
+    if (!ok && was_ok && track_depth_odometry()) {
+      ok = true;
+      bridged_ = keyframe_creation_;
+      inliers_ = 0;
+      ++depth_odometry_frames_;
+    }
     weak_ = ok && inliers_ < opt_.weak_tracking_inliers;
     state_ = ok ? TrackingState::kOk : TrackingState::kLost;
     out.state = state_;
@@ -130,8 +139,31 @@ TrackingOutcome Tracker::track(Frame frame) {
   if (state_ == TrackingState::kOk) {
     last_ = std::move(current_);
     has_last_ = true;
+    last_gray_ = gray_;
+    last_depth_ = depth_;
+  } else {
+    last_gray_.release();
+    last_depth_.release();
   }
+  gray_.release();
+  depth_.release();
   return out;
+}
+
+bool Tracker::track_depth_odometry() {
+  if (!depth_odometry_on_ || last_gray_.empty() || last_depth_.empty() || gray_.empty() || depth_.empty()) return false;
+  if (!depth_odometry_) {
+    const Intrinsics K = intrinsics_of(*ctx_);
+    depth_odometry_ = std::make_unique<DepthOdometry>(K.fx, K.fy, K.cx, K.cy);
+  }
+  const auto start = std::chrono::steady_clock::now();
+  const auto T_cur_last =
+      depth_odometry_->align(last_gray_, last_depth_, gray_, depth_, has_velocity_ ? velocity_ : SE3());
+  if (timer_) timer_->add("depth_odometry", ms_since(start));
+  if (!T_cur_last) return false;
+  current_.clear_matches();
+  current_.set_pose(*T_cur_last * last_.T_cw);
+  return true;
 }
 
 void Tracker::start_lost() {

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "core/stage_timer.hpp"
+#include "slam/depth_odometry.hpp"
 #include "slam/frame.hpp"
 
 namespace builtscene::slam {
@@ -94,6 +95,15 @@ class Tracker {
   // When set, a lost frame is relocalized against the whole map (BoW candidates, EPnP)
   // instead of matched against the last reference keyframe only. Not owned.
   void set_relocalizer(const Relocalizer* relocalizer) { relocalizer_ = relocalizer; }
+  // The images of the frame about to be tracked (gray CV_8U, depth CV_32F metres), for the
+  // depth-odometry bridge; without them (or with `enable_depth_odometry(false)`) it is off.
+  void set_images(const cv::Mat& gray, const cv::Mat& depth) {
+    gray_ = gray;
+    depth_ = depth;
+  }
+  void enable_depth_odometry(bool on) { depth_odometry_on_ = on; }
+  // Frames whose pose came from depth odometry because features alone could not hold it.
+  long depth_odometry_frames() const { return depth_odometry_frames_; }
   // Ids of the frames where tracking resumed through relocalization.
   const std::vector<long>& relocalized_frames() const { return relocalized_frames_; }
 
@@ -122,6 +132,11 @@ class Tracker {
   RelocalizationHook relocalization_hook_;
   const Relocalizer* relocalizer_ = nullptr;
   std::vector<long> relocalized_frames_;
+  std::unique_ptr<DepthOdometry> depth_odometry_;
+  bool depth_odometry_on_ = true;
+  cv::Mat gray_, depth_, last_gray_, last_depth_;  // this frame's and the last tracked frame's images
+  long depth_odometry_frames_ = 0;
+  bool track_depth_odometry();  // the last frame's pose moved by RGB-D odometry
 
   bool initialize();
   void update_last_frame();

@@ -1,0 +1,47 @@
+#include "slam/depth_odometry.hpp"
+
+#include <cmath>
+#include <vector>
+
+#include <opencv2/core/eigen.hpp>
+#include <opencv2/rgbd.hpp>
+
+namespace builtscene::slam {
+
+DepthOdometry::DepthOdometry(double fx, double fy, double cx, double cy) {
+  const cv::Mat K = (cv::Mat_<float>(3, 3) << static_cast<float>(fx), 0.f, static_cast<float>(cx), 0.f,
+                     static_cast<float>(fy), static_cast<float>(cy), 0.f, 0.f, 1.f);
+  // Kinect-class depth: trust 0.4-4 m; four pyramid levels; a frame at 30 Hz moves a few cm.
+  const std::vector<int> iterations{7, 7, 7, 10};
+  odometry_ = cv::rgbd::RgbdICPOdometry::create(K, 0.4f, 4.0f, 0.07f, cv::rgbd::Odometry::DEFAULT_MAX_POINTS_PART(),
+                                                iterations);
+  odometry_->setMaxTranslation(0.15);
+  odometry_->setMaxRotation(10.0);  // degrees per frame
+}
+
+DepthOdometry::~DepthOdometry() = default;
+
+std::optional<SE3> DepthOdometry::align(const cv::Mat& prev_gray, const cv::Mat& prev_depth, const cv::Mat& cur_gray,
+                                        const cv::Mat& cur_depth, const SE3& guess) const {
+  if (prev_gray.empty() || prev_depth.empty() || cur_gray.empty() || cur_depth.empty()) return std::nullopt;
+  if (prev_gray.size() != prev_depth.size() || cur_gray.size() != cur_depth.size()) return std::nullopt;
+  Eigen::Matrix4d g = Eigen::Matrix4d::Identity();
+  g.topLeftCorner<3, 3>() = guess.rotation_matrix();
+  g.topRightCorner<3, 1>() = guess.translation();
+  cv::Mat init, Rt;
+  cv::eigen2cv(g, init);
+  bool ok = false;
+  try {
+    // Rt maps the source (previous) frame's points into the destination (current) frame.
+    ok = odometry_->compute(prev_gray, prev_depth, cv::Mat(), cur_gray, cur_depth, cv::Mat(), Rt, init);
+  } catch (const cv::Exception&) {
+    return std::nullopt;  // too few valid pixels on some level
+  }
+  if (!ok || Rt.empty()) return std::nullopt;
+  Eigen::Matrix4d T;
+  cv::cv2eigen(Rt, T);
+  if (!T.allFinite()) return std::nullopt;
+  return SE3(Eigen::Matrix3d(T.topLeftCorner<3, 3>()), Eigen::Vector3d(T.topRightCorner<3, 1>()));
+}
+
+}  // namespace builtscene::slam
