@@ -8,7 +8,7 @@
 
 namespace builtscene::slam {
 
-DepthOdometry::DepthOdometry(double fx, double fy, double cx, double cy) {
+DepthOdometry::DepthOdometry(double fx, double fy, double cx, double cy) : fx_(fx), fy_(fy), cx_(cx), cy_(cy) {
   const cv::Mat K = (cv::Mat_<float>(3, 3) << static_cast<float>(fx), 0.f, static_cast<float>(cx), 0.f,
                      static_cast<float>(fy), static_cast<float>(cy), 0.f, 0.f, 1.f);
   // Kinect-class depth: trust 0.4-4 m; four pyramid levels; a frame at 30 Hz moves a few cm.
@@ -41,7 +41,36 @@ std::optional<SE3> DepthOdometry::align(const cv::Mat& prev_gray, const cv::Mat&
   Eigen::Matrix4d T;
   cv::cv2eigen(Rt, T);
   if (!T.allFinite()) return std::nullopt;
-  return SE3(Eigen::Matrix3d(T.topLeftCorner<3, 3>()), Eigen::Vector3d(T.topRightCorner<3, 1>()));
+  const SE3 T_cur_prev(Eigen::Matrix3d(T.topLeftCorner<3, 3>()), Eigen::Vector3d(T.topRightCorner<3, 1>()));
+  if (depth_agreement(prev_depth, cur_depth, T_cur_prev) < kMinDepthAgreement) return std::nullopt;
+  return T_cur_prev;
+}
+
+double DepthOdometry::depth_agreement(const cv::Mat& prev_depth, const cv::Mat& cur_depth,
+                                      const SE3& T_cur_prev) const {
+  if (prev_depth.type() != CV_32F || cur_depth.type() != CV_32F) return 0;
+  const Eigen::Matrix3d R = T_cur_prev.rotation_matrix();
+  const Eigen::Vector3d t = T_cur_prev.translation();
+  long valid = 0, compared = 0, agreed = 0;
+  for (int v = 0; v < prev_depth.rows; v += 4) {
+    const float* row = prev_depth.ptr<float>(v);
+    for (int u = 0; u < prev_depth.cols; u += 4) {
+      const double z = row[u];
+      if (!(z > 0) || !std::isfinite(z)) continue;
+      ++valid;
+      const Eigen::Vector3d p = R * Eigen::Vector3d((u - cx_) / fx_ * z, (v - cy_) / fy_ * z, z) + t;
+      if (p.z() <= 0.1) continue;
+      const int u2 = static_cast<int>(std::lround(fx_ * p.x() / p.z() + cx_));
+      const int v2 = static_cast<int>(std::lround(fy_ * p.y() / p.z() + cy_));
+      if (u2 < 0 || v2 < 0 || u2 >= cur_depth.cols || v2 >= cur_depth.rows) continue;
+      const double zc = cur_depth.at<float>(v2, u2);
+      if (!(zc > 0) || !std::isfinite(zc)) continue;
+      ++compared;
+      agreed += std::abs(zc - p.z()) <= 0.02 + 0.02 * p.z();
+    }
+  }
+  if (compared == 0 || compared * 100 < valid) return 0;
+  return static_cast<double>(agreed) / static_cast<double>(compared);
 }
 
 }  // namespace builtscene::slam

@@ -24,12 +24,25 @@ class DepthOdometry {
   DepthOdometry& operator=(const DepthOdometry&) = delete;
 
   // T_cur_prev (a point in the previous camera frame, expressed in the current one), starting
-  // from `guess`; nothing when the alignment fails or moves implausibly far for one frame.
+  // from `guess`; nothing when the alignment fails, moves implausibly far for one frame, or
+  // does not explain the current depth image (see depth_agreement): ICP always returns some
+  // small motion, also between two unrelated views (a kidnapped camera), and a wrong pose
+  // taken as a bridge would be built into the map.
   // gray: CV_8U; depth: CV_32F metres (0 or NaN = none).
   std::optional<SE3> align(const cv::Mat& prev_gray, const cv::Mat& prev_depth, const cv::Mat& cur_gray,
                            const cv::Mat& cur_depth, const SE3& guess) const;
 
+  // Of the previous frame's depth points (every 4th pixel) that T_cur_prev moves into the
+  // current image onto a pixel with a reading, the fraction whose depth agrees with that
+  // reading (within 2 cm + 2 % of the depth); 0 when fewer than 1 % of the points can be
+  // compared. A true alignment explains nearly all of them (occlusions and noise aside).
+  double depth_agreement(const cv::Mat& prev_depth, const cv::Mat& cur_depth, const SE3& T_cur_prev) const;
+
+  // Alignments whose depth_agreement is below this are refused.
+  static constexpr double kMinDepthAgreement = 0.6;
+
  private:
+  double fx_, fy_, cx_, cy_;
   cv::Ptr<cv::rgbd::RgbdICPOdometry> odometry_;
 };
 
