@@ -59,7 +59,7 @@ TEST(MultiHost, HybridExampleOnTwoNamespacedHostsEqualsTheMonolithicReference) {
   const std::string nats = "nats://10.200.0.1:4222";
   std::string why;
   const auto r = on_two_hosts(dir,
-      "ip netns exec $A nats-server -a 10.200.0.1 -p 4222 -js -sd " + d + "/js -l " + d + "/server.log & N=$!\n"
+      "ip netns exec $A nats-server -a 10.200.0.1 -p 4222 -js -sd " + d + "/js -l " + d + "/server.log > /dev/null 2>&1 & N=$!\n"
       "for i in $(seq 100); do grep -q 'Server is ready' " + d + "/server.log 2>/dev/null && break; sleep 0.1; done\n"
       // host B must reach the server across the veth (bash's /dev/tcp: no ping needed)
       "ip netns exec $B timeout 5 bash -c 'exec 3<>/dev/tcp/10.200.0.1/4222' || echo no-route-to-A\n"
