@@ -88,6 +88,7 @@ const bool launch_cmd = register_command({
         }
         if (!o->nats.empty() && !is_nats_url(o->nats))
           throw InputError("--nats '" + o->nats + "': expected nats://HOST:PORT");
+        for (const auto& m : o->only) sc.model(m);  // names a model of the scenario
         if (!o->nats.empty()) make_transport(o->nats);  // reachable before anything starts
         LaunchOptions lo;
         lo.nats = o->nats;

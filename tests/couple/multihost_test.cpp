@@ -99,3 +99,13 @@ TEST(MultiHost, HybridExampleOnTwoNamespacedHostsEqualsTheMonolithicReference) {
   std::printf("two hosts (netns): wind on A with the mediator, building on B: max relative difference %.3g\n", worst);
   EXPECT_EQ(couple_test::left_over(dir), "");
 }
+
+TEST(MultiHost, OnlyOptionBadInputIsAClearError) {
+  const std::string launch = kBin + " couple launch " + couple_test::kExample + "/scenario-hybrid.yaml";
+  auto r = couple_test::run(launch + " --only wind");
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("--only needs --nats nats://HOST:PORT"), std::string::npos) << r.out;
+  r = couple_test::run(launch + " --only windy --nats nats://127.0.0.1:1");
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("scenario-hybrid.yaml: no model named 'windy'"), std::string::npos) << r.out;
+}
