@@ -12,7 +12,8 @@
 # and reports time steps per second (launch --json steps_per_second), the nats-server's
 # CPU seconds (mediator_cpu_seconds) and the CPU seconds of every process of the run.
 # Runs in a private network namespace (root) with a loopback multicast route.
-#   BUILDINGS="2 5 10" STEPS=1000 RUNS=1 bash bench/couple_scale.sh  -> bench-out/couple_scale.json
+#   BUILDINGS="2 5 10" STEPS=2000 RUNS=1 bash bench/couple_scale.sh  -> bench-out/couple_scale.json
+# (RUN_TIMEOUT=600: a launch still running after that many seconds is stopped and left out.)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 BUILDINGS=${BUILDINGS:-"2 5 10"}
@@ -30,6 +31,7 @@ ip route add 224.0.0.0/4 dev lo
 python3 - "$BUILDINGS" "$STEPS" "$RUNS" "$BIN" "$EXAMPLE" "$OUT" <<'PY'
 import json, os, resource, statistics, subprocess, sys, time
 buildings, steps, runs = [int(b) for b in sys.argv[1].split()], int(sys.argv[2]), int(sys.argv[3])
+limit = int(os.environ.get("RUN_TIMEOUT", "600"))  # seconds per launch
 bin_, example, out = sys.argv[4], sys.argv[5], sys.argv[6]
 end_time = steps * 0.01
 
@@ -79,8 +81,12 @@ for n in buildings:
         for _ in range(runs):
             before = cpu_children()
             env = dict(os.environ, TMPDIR=d)
-            p = subprocess.run([bin_, "couple", "launch", f"{d}/scenario-{platform}.yaml", "--json"],
-                               capture_output=True, text=True, env=env)
+            try:
+                p = subprocess.run([bin_, "couple", "launch", f"{d}/scenario-{platform}.yaml", "--json"],
+                                   capture_output=True, text=True, env=env, timeout=limit)
+            except subprocess.TimeoutExpired:
+                print(f"N={n} {platform}: not finished in {limit} s (stopped)", file=sys.stderr)
+                continue
             if p.returncode != 0:
                 print(f"N={n} {platform}: failed: {p.stderr.strip().splitlines()[-1:]}", file=sys.stderr)
                 continue

@@ -307,7 +307,7 @@ const bool spy_cmd = register_command({
           if (it == by_fp.end()) return;
           c.type = it->second;
           try {
-            if (ch == kStatusChannel) {
+            if (is_status_channel(ch)) {
               auto s = decode_status(types, d, n);
               models[s.model] = s;
             } else if (types.get(it->second).member(kStepField)) {

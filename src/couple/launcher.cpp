@@ -70,12 +70,12 @@ class Monitor {
     }
     s.state = complete ? ModelState::kDone : ModelState::kRunning;
     const auto bytes = encode_status(sc_.types, s);
-    tr.publish(kStatusChannel, bytes.data(), bytes.size());
+    tr.publish(status_channel(kRecorderName), bytes.data(), bytes.size());
   }
 
   void on_message(const std::string& ch, const uint8_t* d, std::size_t n) {
     if (log_) log_->write(now_us(), ch, d, n);
-    if (ch != kStatusChannel) {
+    if (!is_status_channel(ch)) {
       auto it = recorded_.find(ch);
       if (it != recorded_.end()) {
         try {

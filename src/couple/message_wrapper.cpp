@@ -7,6 +7,7 @@
 #include <limits>
 #include <map>
 #include <optional>
+#include <set>
 
 #include "core/errors.hpp"
 #include "core/logging.hpp"
@@ -116,7 +117,16 @@ struct MessageWrapper::Impl {
       else
         tr.subscribe(inputs[i].sub->channel, handler);
     }
-    tr.subscribe(kStatusChannel, [this](const std::string&, const uint8_t* d, std::size_t size) { on_status(d, size); });
+    // Statuses of our producers (time grants) and consumers (flow control, re-sends) only.
+    std::set<std::string> peers;
+    for (const auto& out : outputs)
+      for (const auto& c : out.consumers) peers.insert(c.model);
+    for (const auto& sub : cfg.subscribe)
+      for (const auto& m : sc.models)
+        for (const auto& p : m.publish)
+          if (p.channel == sub.channel && m.name != cfg.name) peers.insert(m.name);
+    for (const auto& peer : peers)
+      tr.subscribe(status_channel(peer), [this](const std::string&, const uint8_t* d, std::size_t size) { on_status(d, size); });
     args.resize(inputs.size());
     results.resize(outputs.size());
   }
@@ -243,7 +253,7 @@ struct MessageWrapper::Impl {
     status.error = error;
     status.granted = time.granted();
     const auto bytes = encode_status(sc.types, status);
-    tr.publish(kStatusChannel, bytes.data(), bytes.size());
+    tr.publish(status_channel(cfg.name), bytes.data(), bytes.size());
     last_status = Clock::now();
   }
 

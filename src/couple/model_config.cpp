@@ -383,7 +383,7 @@ void validate_scenario(ScenarioConfig& sc) {
     if (!m.group.empty() && std::find(sc.groups.begin(), sc.groups.end(), m.group) == sc.groups.end())
       sc.groups.push_back(m.group);
   for (const auto& [channel, line] : sc.local_channels) {
-    if (channel == kStatusChannel)
+    if (is_status_channel(channel))
       throw_input_error(sc.file, line, "field 'local.channels': the status channel always goes through the mediator");
     auto it = producers.find(channel);
     if (it == producers.end())
