@@ -207,3 +207,11 @@ TEST(ModelConfig, HybridBadInputNamesTheFileAndField) {
                   "local:\n  transport: udpm://239.255.76.67:65535?ttl=0\n  channels: [A]\n");
   EXPECT_TRUE(has(e, "2 groups need ports up to 65536")) << e;
 }
+
+TEST(ModelConfig, CheckpointEveryMustBeAWholeNonNegativeNumberOfSteps) {
+  auto e = load("ckpt_neg", {{"p.yaml", model("p", kPubA + "checkpoint_every: -5\n")}});
+  EXPECT_TRUE(has(e, "p.yaml:") && has(e, "field 'checkpoint_every' must not be negative")) << e;
+  e = load("ckpt_text", {{"p.yaml", model("p", kPubA + "checkpoint_every: often\n")}});
+  EXPECT_TRUE(has(e, "p.yaml:") && has(e, "field 'checkpoint_every' has a bad value")) << e;
+  EXPECT_EQ(load("ckpt_ok", {{"p.yaml", model("p", kPubA + "checkpoint_every: 3\n")}}), "");
+}
