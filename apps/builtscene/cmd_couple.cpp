@@ -60,7 +60,7 @@ const bool new_model = register_command({
 struct LaunchCliOptions {
   fs::path scenario, record;
   std::string transport, nats;
-  std::vector<std::string> kills;
+  std::vector<std::string> kills, only;
 };
 
 const bool launch_cmd = register_command({
@@ -77,6 +77,9 @@ const bool launch_cmd = register_command({
       cmd.add_option("--kill", o->kills,
                      "Fault injection: SIGKILL MODEL's process at STEP (MODEL@STEP, repeatable); the launcher "
                      "restarts it and it resumes from the mediator's history");
+      cmd.add_option("--only", o->only,
+                     "Several hosts: start only this model here (repeatable); the others run on other hosts "
+                     "under their own `couple launch --only ...` with the same --nats");
       return [o] {
         ScenarioConfig sc = load_scenario(o->scenario);
         if (!o->transport.empty()) {
@@ -85,9 +88,11 @@ const bool launch_cmd = register_command({
         }
         if (!o->nats.empty() && !is_nats_url(o->nats))
           throw InputError("--nats '" + o->nats + "': expected nats://HOST:PORT");
+        for (const auto& m : o->only) sc.model(m);  // names a model of the scenario
         if (!o->nats.empty()) make_transport(o->nats);  // reachable before anything starts
         LaunchOptions lo;
         lo.nats = o->nats;
+        lo.only = o->only;
         for (const auto& k : o->kills) {
           const auto at = k.rfind('@');
           int64_t step = -1;
@@ -302,7 +307,7 @@ const bool spy_cmd = register_command({
           if (it == by_fp.end()) return;
           c.type = it->second;
           try {
-            if (ch == kStatusChannel) {
+            if (is_status_channel(ch)) {
               auto s = decode_status(types, d, n);
               models[s.model] = s;
             } else if (types.get(it->second).member(kStepField)) {

@@ -72,7 +72,7 @@ ChannelSteps read_log_channels(const std::filesystem::path& log, const TypeRegis
   ChannelSteps out;
   std::map<std::string, int64_t> unnumbered;
   while (auto e = reader.next()) {
-    if (e->channel == kStatusChannel) continue;
+    if (is_status_channel(e->channel)) continue;
     auto it = by_fp.find(peek_fingerprint(e->data.data(), e->data.size()));
     if (it == by_fp.end()) {
       if (skipped) ++(*skipped)[e->channel];

@@ -4,6 +4,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <optional>
 #include <cstring>
@@ -14,6 +15,7 @@
 #include "core/errors.hpp"
 #include "core/logging.hpp"
 #include "couple/lcm_codec.hpp"
+#include "couple/hybrid_transport.hpp"
 #include "couple/lcm_log.hpp"
 #include "couple/message_wrapper.hpp"
 #include "couple/nats_server.hpp"
@@ -68,12 +70,12 @@ class Monitor {
     }
     s.state = complete ? ModelState::kDone : ModelState::kRunning;
     const auto bytes = encode_status(sc_.types, s);
-    tr.publish(kStatusChannel, bytes.data(), bytes.size());
+    tr.publish(status_channel(kRecorderName), bytes.data(), bytes.size());
   }
 
   void on_message(const std::string& ch, const uint8_t* d, std::size_t n) {
     if (log_) log_->write(now_us(), ch, d, n);
-    if (ch != kStatusChannel) {
+    if (!is_status_channel(ch)) {
       auto it = recorded_.find(ch);
       if (it != recorded_.end()) {
         try {
@@ -193,7 +195,7 @@ LaunchResult launch_threads(const ScenarioConfig& sc, const LaunchOptions& opt) 
   std::vector<std::unique_ptr<MessageWrapper>> wrappers;
   // Load every model before any starts, so a bad plugin fails before traffic.
   for (const auto& cfg : sc.models) {
-    transports.push_back(make_transport(sc.transport));
+    transports.push_back(make_model_transport(sc, cfg.name, sc.transport, !opt.record.empty()));
     WrapperOptions wo;
     wo.stop = &stop;
     wo.linger_seconds = sc.timeout_seconds;
@@ -249,6 +251,13 @@ std::string describe_exit(int status) {
   return "stopped";
 }
 
+// A local input (LCM between sub-models) keeps no history: its reader cannot resume.
+std::string local_input(const ScenarioConfig& sc, const std::string& model) {
+  for (const auto& s : sc.model(model).subscribe)
+    if (reads_locally(sc, model, s.channel)) return s.channel;
+  return "";
+}
+
 LaunchResult launch_processes(const ScenarioConfig& sc, const LaunchOptions& opt, NatsServer* server,
                               bool recovery) {
   auto tr = make_transport(sc.transport);
@@ -276,7 +285,8 @@ LaunchResult launch_processes(const ScenarioConfig& sc, const LaunchOptions& opt
     }
     children[pid] = model;
   };
-  for (const auto& m : sc.models) spawn(m.name, false);
+  for (const auto& m : sc.models)
+    if (opt.only.empty() || std::find(opt.only.begin(), opt.only.end(), m.name) != opt.only.end()) spawn(m.name, false);
   std::string failure;
   std::map<std::string, int> exit_status, restarts;
   auto reap = [&](bool block) {
@@ -291,7 +301,7 @@ LaunchResult launch_processes(const ScenarioConfig& sc, const LaunchOptions& opt
       // A process that died by a signal (kill -9, a crash) is restarted while the run goes
       // on; it replays its inputs from the mediator's history.
       if (recovery && !block && failure.empty() && !stop_flag() && WIFSIGNALED(status) &&
-          restarts[model] < opt.max_restarts) {
+          restarts[model] < opt.max_restarts && local_input(sc, model).empty()) {
         ++restarts[model];
         spdlog::warn("couple: model '{}' {} at step {}; restarting it (attempt {}), it resumes from the mediator's history",
                      model, describe_exit(status), mon.statuses().at(model).step, restarts[model]);
@@ -306,6 +316,9 @@ LaunchResult launch_processes(const ScenarioConfig& sc, const LaunchOptions& opt
         auto why = mon.failure();
         failure = why ? *why : "model '" + it->second + "' " + describe_exit(status) + " at step " +
                                    std::to_string(mon.statuses().at(it->second).step);
+        if (recovery && WIFSIGNALED(status) && !local_input(sc, model).empty())
+          failure += " (not restarted: it reads the local channel '" + local_input(sc, model) +
+                     "', LCM within its group, which keeps no history)";
       }
       children.erase(it);
       if (children.empty()) break;
@@ -381,10 +394,16 @@ LaunchResult launch(const ScenarioConfig& scenario, const LaunchOptions& opt) {
   install_stop_signals();
   for (const auto& [m, step] : opt.kills) {
     scenario.model(m);  // InputError naming an unknown model
+    if (const std::string ch = local_input(scenario, m); !ch.empty())
+      throw InputError("--kill " + m + "@" + std::to_string(step) + ": model '" + m + "' reads the local channel '" + ch +
+                       "' (LCM within its group, no history), so it cannot resume after a kill");
     if (step < 0 || step >= scenario.model(m).steps())
       throw InputError("--kill " + m + "@" + std::to_string(step) + ": the step must be in 0.." +
                        std::to_string(scenario.model(m).steps() - 1));
   }
+  for (const auto& m : opt.only) scenario.model(m);  // InputError naming an unknown model
+  if (!opt.only.empty() && opt.nats.empty())
+    throw InputError("--only needs --nats nats://HOST:PORT: the models on other hosts must reach the same mediator");
   if (!opt.kills.empty() && opt.nats.empty() && scenario.transport != kMediator && !is_nats_url(scenario.transport))
     throw InputError("--kill needs the mediator (transport: mediator, nats://HOST:PORT or --nats): over '" +
                      scenario.transport + "' a killed model has no history to resume from");
@@ -405,8 +424,10 @@ LaunchResult launch(const ScenarioConfig& scenario, const LaunchOptions& opt) {
   bool history = false;
   if (is_nats_url(sc.transport)) {
     std::vector<std::string> channels;
-    for (const auto& m : sc.models)
+    for (const auto& m : sc.models) {
       for (const auto& p : m.publish) channels.push_back(p.channel);
+      if (m.checkpoint_every > 0) channels.push_back(checkpoint_channel(m.name));
+    }
     try {
       create_history_stream(sc.transport, channels, opt.history_per_channel);
       history = true;
@@ -427,7 +448,7 @@ int run_model_process(const std::filesystem::path& scenario_file, const std::str
   const ScenarioConfig sc = load_scenario(scenario_file);
   const ModelConfig& cfg = sc.model(model);
   const std::string url = !transport.empty() ? transport : cfg.transport.empty() ? sc.transport : cfg.transport;
-  auto tr = make_transport(url);
+  auto tr = make_model_transport(sc, model, url, recorder);
   WrapperOptions wo;
   wo.stop = &stop_flag();
   wo.linger_seconds = sc.timeout_seconds;

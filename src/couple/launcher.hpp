@@ -27,6 +27,10 @@ struct LaunchOptions {
   // Fault injection: SIGKILL model M's process when it reaches step S (M, S); the launcher
   // restarts it and it resumes from the mediator's history. Needs the mediator.
   std::vector<std::pair<std::string, int64_t>> kills;
+  // Several hosts: start only these models here (empty: all); the others run on other
+  // hosts, each under its own `couple launch --only ...` against the same --nats server.
+  // This launcher still watches every model's status and fails on a stall.
+  std::vector<std::string> only;
   int64_t history_per_channel = 1000000;  // JetStream: messages kept per channel
   int max_restarts = 3;                   // per model
 };

@@ -7,6 +7,7 @@
 #include <limits>
 #include <map>
 #include <optional>
+#include <set>
 
 #include "core/errors.hpp"
 #include "core/logging.hpp"
@@ -116,7 +117,16 @@ struct MessageWrapper::Impl {
       else
         tr.subscribe(inputs[i].sub->channel, handler);
     }
-    tr.subscribe(kStatusChannel, [this](const std::string&, const uint8_t* d, std::size_t size) { on_status(d, size); });
+    // Statuses of our producers (time grants) and consumers (flow control, re-sends) only.
+    std::set<std::string> peers;
+    for (const auto& out : outputs)
+      for (const auto& c : out.consumers) peers.insert(c.model);
+    for (const auto& sub : cfg.subscribe)
+      for (const auto& m : sc.models)
+        for (const auto& p : m.publish)
+          if (p.channel == sub.channel && m.name != cfg.name) peers.insert(m.name);
+    for (const auto& peer : peers)
+      tr.subscribe(status_channel(peer), [this](const std::string&, const uint8_t* d, std::size_t size) { on_status(d, size); });
     args.resize(inputs.size());
     results.resize(outputs.size());
   }
@@ -243,7 +253,7 @@ struct MessageWrapper::Impl {
     status.error = error;
     status.granted = time.granted();
     const auto bytes = encode_status(sc.types, status);
-    tr.publish(kStatusChannel, bytes.data(), bytes.size());
+    tr.publish(status_channel(cfg.name), bytes.data(), bytes.size());
     last_status = Clock::now();
   }
 
@@ -256,7 +266,55 @@ struct MessageWrapper::Impl {
 
   bool stop_requested() const { return opt.stop && opt.stop->load(); }
 
+  bool checkpointing() const { return cfg.checkpoint_every > 0 && fn->can_checkpoint() && tr.keeps_history(); }
+
+  // The model's state, our own inputs still needed and the next step, on the mediator.
+  void save_checkpoint() {
+    json self = json::object();
+    for (const auto& in : inputs) {
+      if (!in.self) continue;
+      json list = json::array();
+      for (const auto& [step, bytes] : in.buffer) list.push_back({{"step", step}, {"message", json::binary(bytes)}});
+      self[in.sub->channel] = std::move(list);
+    }
+    const json j = {{"step", n}, {"model", json::binary(fn->save())}, {"self", std::move(self)}};
+    const auto bytes = json::to_cbor(j);
+    tr.publish(checkpoint_channel(cfg.name), bytes.data(), bytes.size());
+  }
+
+  // A restarted model continues from its last checkpoint (outputs before it are out).
+  void load_checkpoint() {
+    const Bytes stored = tr.last_stored(checkpoint_channel(cfg.name));
+    if (stored.empty()) {
+      spdlog::warn("{}: no checkpoint stored yet; replaying the inputs from step 0", cfg.name);
+      return;
+    }
+    json j;
+    int64_t step = 0;
+    try {
+      j = json::from_cbor(stored);
+      step = j.at("step").get<int64_t>();
+      if (step < 0 || step > total) throw std::out_of_range("step");
+    } catch (const std::exception& e) {
+      spdlog::warn("{}: its checkpoint is unreadable ({}); replaying the inputs from step 0", cfg.name, e.what());
+      return;
+    }
+    fn->load(j.at("model").get_binary());
+    for (auto& in : inputs) {
+      if (!in.self || !j["self"].contains(in.sub->channel)) continue;
+      in.buffer.clear();
+      for (const auto& e : j["self"][in.sub->channel]) in.buffer.emplace(e.at("step").get<int64_t>(), e.at("message").get_binary());
+    }
+    n = step;
+    for (auto& out : outputs) out.last = n - 1;
+    spdlog::warn("{}: resumed from its checkpoint at step {}", cfg.name, n);
+  }
+
   void run() {
+    if (opt.resume && checkpointing()) load_checkpoint();
+    else if (cfg.checkpoint_every > 0 && !fn->can_checkpoint())
+      spdlog::warn("{}: checkpoint_every is set but the plugin has no save/load hooks (see {}_model.hpp)", cfg.name,
+                   cfg.name);
     for (auto& out : outputs)
       if (out.pub->initial) publish_output(out, -1, out.codec.encode(merged(out.codec, *out.pub->initial, -1)));
     send_status(ModelState::kRunning, nullptr);
@@ -317,6 +375,7 @@ struct MessageWrapper::Impl {
     if (opt.on_step) opt.on_step(n);
     ++n;
     trim();
+    if (checkpointing() && n % cfg.checkpoint_every == 0 && n < total) save_checkpoint();
     if (n % opt.status_every == 0) send_status(ModelState::kRunning, nullptr);
   }
 };

@@ -2,6 +2,7 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
 #include <cmath>
 #include <map>
 #include <set>
@@ -131,10 +132,26 @@ const ModelConfig& ScenarioConfig::model(const std::string& name) const {
   throw InputError(located(file, 0, "no model named '" + name + "'"));
 }
 
+std::string ScenarioConfig::local_url(const std::string& group) const {
+  const auto it = std::find(groups.begin(), groups.end(), group);
+  if (it == groups.end()) throw InputError(located(file, 0, "no group named '" + group + "'"));
+  const int index = static_cast<int>(it - groups.begin());
+  if (local_transport.rfind("memq://", 0) == 0) {
+    const auto q = local_transport.find('?');
+    return q == std::string::npos ? local_transport + "-" + group
+                                  : local_transport.substr(0, q) + "-" + group + local_transport.substr(q);
+  }
+  // udpm://GROUP:PORT[?options]
+  const auto colon = local_transport.rfind(':'), q = local_transport.find('?');
+  const std::string port = local_transport.substr(colon + 1, q == std::string::npos ? std::string::npos : q - colon - 1);
+  return local_transport.substr(0, colon + 1) + std::to_string(std::stoi(port) + index) +
+         (q == std::string::npos ? "" : local_transport.substr(q));
+}
+
 ModelConfig load_model_config(const fs::path& file) {
   const YAML::Node root = load_yaml(file);
   check_keys(file, root,
-             {"name", "dt", "end_time", "lookahead", "plugin", "command", "parameters", "messages", "subscribe",
+             {"name", "dt", "end_time", "lookahead", "checkpoint_every", "plugin", "command", "parameters", "messages", "subscribe",
               "publish", "transport"},
              "");
   ModelConfig m;
@@ -153,6 +170,8 @@ ModelConfig load_model_config(const fs::path& file) {
     bad(file, root["end_time"], "field 'end_time' must be a whole number of time steps 'dt'");
   m.lookahead = get_or<double>(file, root, "lookahead", "", 0.0);
   if (!(m.lookahead >= 0)) bad(file, root["lookahead"], "field 'lookahead' must not be negative (seconds)");
+  m.checkpoint_every = get_or<int64_t>(file, root, "checkpoint_every", "", 0);
+  if (m.checkpoint_every < 0) bad(file, root["checkpoint_every"], "field 'checkpoint_every' must not be negative (steps)");
   m.plugin = get_or<std::string>(file, root, "plugin", "", "");
   if (root["command"]) {
     const YAML::Node c = root["command"];
@@ -217,7 +236,7 @@ ModelConfig load_model_config(const fs::path& file) {
 ScenarioConfig load_scenario(const fs::path& file_in) {
   const fs::path file = fs::absolute(file_in).lexically_normal();
   const YAML::Node root = load_yaml(file);
-  check_keys(file, root, {"name", "transport", "timeout", "messages", "models"}, "");
+  check_keys(file, root, {"name", "transport", "timeout", "messages", "models", "local"}, "");
   ScenarioConfig sc;
   sc.file = file;
   sc.name = get_or<std::string>(file, root, "name", "", file.stem().string());
@@ -229,17 +248,44 @@ ScenarioConfig load_scenario(const fs::path& file_in) {
   if (!models || !models.IsSequence() || models.size() == 0) bad(file, root, "field 'models' must be a non-empty list");
   for (std::size_t i = 0; i < models.size(); ++i) {
     const YAML::Node n = models[i];
-    std::string rel;
-    if (n.IsScalar())
+    std::string rel, group;
+    const std::string where = "models[" + std::to_string(i) + "].";
+    if (n.IsScalar()) {
       rel = n.as<std::string>();
-    else if (n.IsMap() && n["config"])
-      rel = n["config"].as<std::string>();
-    else
-      bad(file, n, "field 'models[" + std::to_string(i) + "]' must be a config file path (or {config: PATH})");
+    } else if (n.IsMap() && n["config"]) {
+      check_keys(file, n, {"config", "group"}, where);
+      rel = get<std::string>(file, n, "config", where);
+      group = get_or<std::string>(file, n, "group", where, "");
+      if (n["group"] && group.empty()) bad(file, n["group"], "field '" + where + "group' must not be empty");
+    } else {
+      bad(file, n, "field 'models[" + std::to_string(i) + "]' must be a config file path (or {config: PATH, group: NAME})");
+    }
     fs::path p = rel;
     if (p.is_relative()) p = file.parent_path() / p;
     if (!fs::exists(p)) bad(file, n, "field 'models[" + std::to_string(i) + "]': file not found: " + p.string());
     sc.models.push_back(load_model_config(p.lexically_normal()));
+    sc.models.back().group = group;
+  }
+  if (const YAML::Node local = root["local"]) {
+    if (!local.IsMap()) bad(file, local, "field 'local' must be a mapping {transport: udpm://..., channels: [...]}");
+    check_keys(file, local, {"transport", "channels"}, "local.");
+    sc.local_transport = get_or<std::string>(file, local, "transport", "local.", sc.local_transport);
+    const bool udpm = sc.local_transport.rfind("udpm://", 0) == 0, memq = sc.local_transport.rfind("memq://", 0) == 0;
+    bool port_ok = memq;
+    if (udpm) {
+      const auto colon = sc.local_transport.rfind(':'), q = sc.local_transport.find('?');
+      const std::string port = colon > 6 ? sc.local_transport.substr(colon + 1, q == std::string::npos ? std::string::npos : q - colon - 1) : "";
+      port_ok = !port.empty() && port.size() <= 5 && port.find_first_not_of("0123456789") == std::string::npos;
+    }
+    if (!port_ok)
+      bad(file, local["transport"], "field 'local.transport': '" + sc.local_transport +
+                                        "' must be udpm://GROUP:PORT[?ttl=0] (or memq://NAME)");
+    const YAML::Node ch = local["channels"];
+    if (!ch || !ch.IsSequence() || ch.size() == 0) bad(file, local, "field 'local.channels' must be a non-empty list of channels");
+    for (std::size_t i = 0; i < ch.size(); ++i) {
+      if (!ch[i].IsScalar()) bad(file, ch[i], "field 'local.channels[" + std::to_string(i) + "]' must be a channel name");
+      sc.local_channels.emplace(ch[i].as<std::string>(), line_of(ch[i]));
+    }
   }
   validate_scenario(sc);
   return sc;
@@ -329,6 +375,30 @@ void validate_scenario(ScenarioConfig& sc) {
                                               ", substeps=" + std::to_string(s.substeps) + " with dt " +
                                               std::to_string(m.dt) + " needs " + std::to_string(want));
     }
+  }
+
+  // Hybrid: a local channel travels between the sub-models of its producer's group.
+  sc.groups.clear();
+  for (const auto& m : sc.models)
+    if (!m.group.empty() && std::find(sc.groups.begin(), sc.groups.end(), m.group) == sc.groups.end())
+      sc.groups.push_back(m.group);
+  for (const auto& [channel, line] : sc.local_channels) {
+    if (is_status_channel(channel))
+      throw_input_error(sc.file, line, "field 'local.channels': the status channel always goes through the mediator");
+    auto it = producers.find(channel);
+    if (it == producers.end())
+      throw_input_error(sc.file, line, "field 'local.channels': no model publishes channel '" + channel + "'");
+    if (it->second.model->group.empty())
+      throw_input_error(sc.file, line, "field 'local.channels': channel '" + channel + "' is local but its producer '" +
+                                           it->second.model->name + "' is in no group (models: - {config: " +
+                                           it->second.model->file.filename().string() + ", group: NAME})");
+  }
+  if (!sc.groups.empty() && sc.local_transport.rfind("udpm://", 0) == 0) {
+    const auto colon = sc.local_transport.rfind(':');
+    const int last = std::stoi(sc.local_transport.substr(colon + 1)) + static_cast<int>(sc.groups.size()) - 1;
+    if (last > 65535)
+      throw_input_error(sc.file, 0, "field 'local.transport': " + std::to_string(sc.groups.size()) +
+                                        " groups need ports up to " + std::to_string(last) + " (above 65535)");
   }
 
   // Dry run of the step schedule: a model advances when every producer step it needs is

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <nlohmann/json.hpp>
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -49,6 +50,9 @@ struct ModelConfig {
   // The model's promise (HLA lookahead): its outputs of time t take effect at t + lookahead
   // at the earliest; the time manager adds it to every message's time stamp.
   double lookahead = 0;
+  // Recovery: save the model's state (the prototype's optional save/load hooks) to the
+  // mediator every this many steps; a restarted model resumes from the last one. 0: never.
+  int64_t checkpoint_every = 0;
   std::string plugin;                  // shared library (name or path) built from a generated stub
   std::vector<std::string> command;    // or: an external program speaking JSON lines
   nlohmann::json parameters = nlohmann::json::object();
@@ -56,6 +60,9 @@ struct ModelConfig {
   std::vector<Subscription> subscribe;
   std::vector<Publication> publish;
   std::string transport;  // empty: the scenario's
+  // Set by the scenario (models[i].group): the sub-models of one model share a group,
+  // and the scenario's local channels travel between them over LCM.
+  std::string group;
 };
 
 struct ScenarioConfig {
@@ -66,9 +73,23 @@ struct ScenarioConfig {
   std::vector<std::filesystem::path> messages;
   std::vector<ModelConfig> models;
   TypeRegistry types;  // every .lcm file of the scenario and its models
+  // The hybrid platform (the source's Figure 5.4): these channels (-> line in the file)
+  // travel over LCM between the sub-models of their producer's group; every other
+  // channel, and a local one's copy for consumers outside the group, goes through
+  // `transport` (the mediator).
+  std::map<std::string, std::size_t> local_channels;
+  std::string local_transport = "udpm://239.255.76.67:7668?ttl=0";
+  std::vector<std::string> groups;  // in order of first appearance
 
   const ModelConfig& model(const std::string& name) const;  // throws InputError
+  bool is_local(const std::string& channel) const { return local_channels.count(channel) > 0; }
+  // The LCM URL of a group: local_transport with its port + the group's index (each group
+  // its own multicast port, so no process receives another building's datagrams).
+  std::string local_url(const std::string& group) const;
 };
+
+// The mediator subject that keeps a model's checkpoints (in the run's history stream).
+inline std::string checkpoint_channel(const std::string& model) { return "BUILTSCENE_CHECKPOINT." + model; }
 
 // The name of the field in each message type that carries the producer's step.
 inline constexpr const char* kStepField = "step";

@@ -41,6 +41,11 @@ class PluginModel final : public ModelFunction {
     if (version() != BUILTSCENE_MODEL_ABI_VERSION)
       throw InputError(located(lib, 0, "plugin ABI version " + std::to_string(version()) + ", expected " +
                                            std::to_string(BUILTSCENE_MODEL_ABI_VERSION) + ": regenerate the stub"));
+    // The checkpoint hooks are optional (stubs generated before them lack them).
+    auto can = reinterpret_cast<int (*)()>(dlsym(handle_, "builtscene_model_can_checkpoint"));
+    save_ = reinterpret_cast<decltype(save_)>(dlsym(handle_, "builtscene_model_save"));
+    load_ = reinterpret_cast<decltype(load_)>(dlsym(handle_, "builtscene_model_load"));
+    checkpoints_ = can && save_ && load_ && can() != 0;
     char err[512] = "";
     model_ = create_(cfg.parameters.dump().c_str(), err, sizeof err);
     if (!model_) throw Failure("model '" + name_ + "' failed to start: " + err);
@@ -49,6 +54,20 @@ class PluginModel final : public ModelFunction {
     if (model_) destroy_(model_);
     // The library stays loaded: static destructors of plugins running after dlclose
     // are a classic source of crashes at exit, and a process loads each plugin once.
+  }
+  bool can_checkpoint() const override { return checkpoints_; }
+  Bytes save() override {
+    Bytes state;
+    char err[512] = "";
+    auto emit = [](void* c, size_t, const unsigned char* d, size_t s) { static_cast<Bytes*>(c)->assign(d, d + s); };
+    if (save_(model_, emit, &state, err, sizeof err) != 0)
+      throw Failure("model '" + name_ + "' could not save its checkpoint: " + err);
+    return state;
+  }
+  void load(const Bytes& state) override {
+    char err[512] = "";
+    if (load_(model_, state.data(), state.size(), err, sizeof err) != 0)
+      throw Failure("model '" + name_ + "' could not load its checkpoint: " + err);
   }
   void step(int64_t n, double t, const std::vector<std::vector<const Bytes*>>& inputs,
             std::vector<Bytes>& outputs) override {
@@ -83,6 +102,9 @@ class PluginModel final : public ModelFunction {
   void* (*create_)(const char*, char*, size_t) = nullptr;
   int (*step_)(void*, int64_t, double, const bs_buffer*, size_t, bs_emit_fn, void*, char*, size_t) = nullptr;
   void (*destroy_)(void*) = nullptr;
+  int (*save_)(void*, bs_emit_fn, void*, char*, size_t) = nullptr;
+  int (*load_)(void*, const unsigned char*, size_t, char*, size_t) = nullptr;
+  bool checkpoints_ = false;
   void* model_ = nullptr;
   std::vector<bs_buffer> flat_;
 };

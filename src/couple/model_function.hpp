@@ -22,6 +22,11 @@ class ModelFunction {
   // is stamped by the wrapper). Throws Failure with the model's own message on error.
   virtual void step(int64_t n, double t, const std::vector<std::vector<const Bytes*>>& inputs,
                     std::vector<Bytes>& outputs) = 0;
+  // Checkpoints (optional hooks of the generated prototype): the model's state as bytes,
+  // and back. Throw Failure on error.
+  virtual bool can_checkpoint() const { return false; }
+  virtual Bytes save() { return {}; }
+  virtual void load(const Bytes& /*state*/) {}
 };
 
 // Loads the model named by the config (plugin or command). Plugins are searched as given,

@@ -1,6 +1,8 @@
 #include "couple/nats_transport.hpp"
 
 #include <nats/nats.h>
+#include <sys/eventfd.h>
+#include <unistd.h>
 
 #include <chrono>
 #include <condition_variable>
@@ -34,6 +36,8 @@ class NatsTransport final : public Transport {
  public:
   NatsTransport(std::string url, std::string address, std::string prefix)
       : url_(std::move(url)), prefix_(std::move(prefix)) {
+    wake_ = eventfd(0, EFD_NONBLOCK | EFD_CLOEXEC);
+    if (wake_ < 0) throw Failure("mediator " + url_ + ": eventfd failed");
     natsOptions* opts = nullptr;
     natsStatus s = natsOptions_Create(&opts);
     if (s == NATS_OK) s = natsOptions_SetURL(opts, address.c_str());
@@ -45,6 +49,7 @@ class NatsTransport final : public Transport {
     if (s == NATS_OK) s = natsOptions_SetReconnectWait(opts, 250);
     if (s == NATS_OK) s = natsConnection_Connect(&conn_, opts);
     natsOptions_Destroy(opts);
+    if (s != NATS_OK) close(wake_);
     if (s != NATS_OK)
       throw Failure("cannot connect to the mediator (NATS server) at " + address + " (" + url_ + "): " +
                     status_text(s) +
@@ -63,6 +68,7 @@ class NatsTransport final : public Transport {
     natsConnection_FlushTimeout(conn_, 2000);  // what we published reaches the server
     if (js_) jsCtx_Destroy(js_);
     natsConnection_Destroy(conn_);
+    close(wake_);
   }
 
   void make_history_stream(const std::vector<std::string>& channels, int64_t max_per_channel) {
@@ -161,6 +167,9 @@ class NatsTransport final : public Transport {
       std::unique_lock lock(m_);
       if (queue_.empty())
         cv_.wait_for(lock, std::chrono::milliseconds(timeout_ms), [&] { return !queue_.empty(); });
+      // Reset under the lock: the descriptor is readable exactly while the queue is not empty.
+      uint64_t count;
+      [[maybe_unused]] const auto got = read(wake_, &count, sizeof count);
       batch.swap(queue_);
     }
     for (const auto& item : batch) subs_[item.sub].handler(item.channel, item.data.data(), item.data.size());
@@ -168,6 +177,7 @@ class NatsTransport final : public Transport {
   }
 
   std::string url() const override { return url_; }
+  int wait_fd() const override { return wake_; }
 
  private:
   struct Slot {
@@ -197,6 +207,8 @@ class NatsTransport final : public Transport {
     natsMsg_Destroy(msg);
     std::lock_guard lock(self->m_);
     self->queue_.push_back(std::move(item));
+    const uint64_t one = 1;
+    [[maybe_unused]] const auto put = write(self->wake_, &one, sizeof one);
     self->cv_.notify_one();
   }
   static void on_complete(void* closure) {
@@ -222,6 +234,7 @@ class NatsTransport final : public Transport {
   std::condition_variable cv_;
   std::deque<Item> queue_;
   std::size_t completed_ = 0;
+  int wake_ = -1;  // eventfd, readable while queue_ holds messages (wait_fd)
 };
 
 }  // namespace

@@ -165,13 +165,19 @@ GeneratedStub generate_model_stub(const ModelConfig& cfg, std::vector<fs::path> 
       << "// The model function of '" << N << "': every input-message variable is an argument, every\n"
       << "// output-message variable a result (a reference to assign). The wrapper calls it once per\n"
       << "// time step `step` (time t = step * " << cfg.dt << ") when all inputs of the step are there.\n"
-      << "#pragma once\n#include <cstdint>\n#include <vector>\n#include <nlohmann/json.hpp>\n\n";
+      << "#pragma once\n#include <cstdint>\n#include <string>\n#include <vector>\n#include <nlohmann/json.hpp>\n\n";
   for (const auto& h : headers) hpp << "#include \"" << h << "\"\n";
   hpp << "\n// Your model's state (defined in " << N << ".cpp); made once from the config's parameters.\n"
       << "struct " << State << ";\n"
       << State << "* " << N << "_init(const nlohmann::json& parameters);\n"
       << "void " << N << "_free(" << State << "* state);\n\n"
-      << sig.str() << ";\n";
+      << sig.str() << ";\n\n"
+      << "// Optional checkpoint hooks. Define both in " << N << ".cpp and set `checkpoint_every: STEPS`\n"
+      << "// in the config: a restarted model then resumes from its last checkpoint instead of\n"
+      << "// replaying its inputs from step 0. save writes everything the state keeps between steps\n"
+      << "// into `bytes`, load restores it; return false on error. (Weak: a model without them builds.)\n"
+      << "__attribute__((weak)) bool " << N << "_save(const " << State << "& state, std::string& bytes);\n"
+      << "__attribute__((weak)) bool " << N << "_load(" << State << "& state, const std::string& bytes);\n";
   write_file(out_dir / (N + "_model.hpp"), hpp.str(), out);
 
   std::ostringstream glue;
@@ -209,7 +215,23 @@ GeneratedStub generate_model_stub(const ModelConfig& cfg, std::vector<fs::path> 
   glue << "    return 0;\n  } catch (const std::exception& e) {\n    set_error(error, error_size, e.what());\n"
        << "  } catch (...) {\n    set_error(error, error_size, \"unknown exception\");\n  }\n  return 1;\n}\n\n"
        << "extern \"C\" void builtscene_model_destroy(void* model) { " << N << "_free(static_cast<" << State
-       << "*>(model)); }\n";
+       << "*>(model)); }\n\n"
+       << "extern \"C\" int builtscene_model_can_checkpoint(void) { return " << N << "_save != nullptr && " << N
+       << "_load != nullptr; }\n\n"
+       << "extern \"C\" int builtscene_model_save(void* model, bs_emit_fn emit, void* context, char* error,\n"
+       << "                                      size_t error_size) {\n  try {\n    std::string bytes;\n"
+       << "    if (!" << N << "_save || !" << N << "_save(*static_cast<const " << State << "*>(model), bytes))\n"
+       << "      throw std::runtime_error(\"" << N << "_save failed\");\n"
+       << "    emit(context, 0, reinterpret_cast<const unsigned char*>(bytes.data()), bytes.size());\n    return 0;\n"
+       << "  } catch (const std::exception& e) {\n    set_error(error, error_size, e.what());\n"
+       << "  } catch (...) {\n    set_error(error, error_size, \"unknown exception\");\n  }\n  return 1;\n}\n\n"
+       << "extern \"C\" int builtscene_model_load(void* model, const unsigned char* data, size_t size, char* error,\n"
+       << "                                      size_t error_size) {\n  try {\n"
+       << "    const std::string bytes(reinterpret_cast<const char*>(data), size);\n"
+       << "    if (!" << N << "_load || !" << N << "_load(*static_cast<" << State << "*>(model), bytes))\n"
+       << "      throw std::runtime_error(\"" << N << "_load failed\");\n    return 0;\n"
+       << "  } catch (const std::exception& e) {\n    set_error(error, error_size, e.what());\n"
+       << "  } catch (...) {\n    set_error(error, error_size, \"unknown exception\");\n  }\n  return 1;\n}\n";
   write_file(out_dir / (N + "_glue.cpp"), glue.str(), out);
 
   std::ostringstream cm;
@@ -249,7 +271,11 @@ GeneratedStub generate_model_stub(const ModelConfig& cfg, std::vector<fs::path> 
     for (const auto& a : ins) u << "  (void)" << a.name << ";\n";
     u << "  (void)state;\n  (void)step;\n  (void)t;\n";
     for (const auto& a : outs) u << "  " << a.name << " = {};\n";
-    u << "}\n";
+    u << "}\n\n"
+      << "// Optional checkpoints (see " << N << "_model.hpp): uncomment, save what the state keeps\n"
+      << "// between steps, and set `checkpoint_every: STEPS` in the config.\n"
+      << "// bool " << N << "_save(const " << State << "& state, std::string& bytes) { bytes = ...; return true; }\n"
+      << "// bool " << N << "_load(" << State << "& state, const std::string& bytes) { ...; return true; }\n";
     write_file(user_cpp, u.str(), out);
   }
 

@@ -26,6 +26,15 @@ struct status_t {
 )";
 }
 
+std::string status_channel(const std::string& model) {
+  return model == kRecorderName ? std::string(kStatusChannel) : std::string(kStatusChannel) + "." + model;
+}
+
+bool is_status_channel(const std::string& channel) {
+  const std::size_t n = std::char_traits<char>::length(kStatusChannel);
+  return channel.compare(0, n, kStatusChannel) == 0 && (channel.size() == n || channel[n] == '.');
+}
+
 const char* state_name(ModelState s) {
   switch (s) {
     case ModelState::kRunning: return "running";

@@ -16,6 +16,13 @@ inline constexpr const char* kStatusChannel = "BUILTSCENE_STATUS";
 inline constexpr const char* kStatusType = "builtscene.status_t";
 inline constexpr const char* kRecorderName = "(recorder)";
 
+// Each model reports on its own channel BUILTSCENE_STATUS.MODEL (the launcher's recorder on
+// the bare BUILTSCENE_STATUS), so a wrapper subscribes only to the statuses of the models it
+// exchanges data with: when every wrapper heard every status, a run of N models cost
+// O(N^2) deliveries and the mediator saturated at a few tens of models.
+std::string status_channel(const std::string& model);
+bool is_status_channel(const std::string& channel);
+
 enum class ModelState : int8_t { kRunning = 0, kWaiting = 1, kDone = 2, kFailed = 3, kStopped = 4 };
 const char* state_name(ModelState s);
 

@@ -2,6 +2,8 @@
 
 #include <lcm/lcm.h>
 #include <poll.h>
+#include <sys/eventfd.h>
+#include <unistd.h>
 
 #include <condition_variable>
 #include <deque>
@@ -56,9 +58,15 @@ class MemqEndpoint final : public Transport {
   // to test the wrapper's recovery from a lossy network.
   MemqEndpoint(std::string url, const std::string& name, double drop, uint64_t seed)
       : url_(std::move(url)), bus_(MemqBus::get(name)), drop_(drop), rng_(seed) {
+    wake_ = eventfd(0, EFD_NONBLOCK | EFD_CLOEXEC);
+    if (wake_ < 0) throw Failure("memq: eventfd failed");
     bus_->attach(this);
   }
-  ~MemqEndpoint() override { bus_->detach(this); }
+  ~MemqEndpoint() override {
+    bus_->detach(this);
+    close(wake_);
+  }
+  int wait_fd() const override { return wake_; }
 
   void subscribe(const std::string& channel, Handler handler) override {
     std::lock_guard lock(m_);
@@ -76,6 +84,8 @@ class MemqEndpoint final : public Transport {
     if (all_.empty() && !handlers_.count(channel)) return;
     if (drop_ > 0 && std::uniform_real_distribution<double>(0, 1)(rng_) < drop_) return;
     queue_.push_back({channel, std::vector<uint8_t>(data, data + size)});
+    const uint64_t one = 1;
+    [[maybe_unused]] const auto put = write(wake_, &one, sizeof one);
     cv_.notify_one();
   }
   int handle(int timeout_ms) override {
@@ -83,6 +93,9 @@ class MemqEndpoint final : public Transport {
     {
       std::unique_lock lock(m_);
       if (queue_.empty()) cv_.wait_for(lock, std::chrono::milliseconds(timeout_ms), [&] { return !queue_.empty(); });
+      // Reset under the lock: the descriptor is readable exactly while the queue is not empty.
+      uint64_t count;
+      [[maybe_unused]] const auto got = read(wake_, &count, sizeof count);
       batch.swap(queue_);
     }
     for (const auto& item : batch) {
@@ -109,6 +122,7 @@ class MemqEndpoint final : public Transport {
   std::deque<Item> queue_;
   std::map<std::string, std::vector<Handler>> handlers_;
   std::vector<Handler> all_;
+  int wake_ = -1;  // eventfd, readable while queue_ holds messages (wait_fd)
 };
 
 void MemqBus::publish(const std::string& channel, const uint8_t* data, std::size_t size) {
@@ -169,6 +183,7 @@ class LcmTransport final : public Transport {
     return count_;
   }
   std::string url() const override { return url_; }
+  int wait_fd() const override { return lcm_get_fileno(lcm_); }
 
  private:
   static void on_message(const lcm_recv_buf_t* rbuf, const char* channel, void* user) {

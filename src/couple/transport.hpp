@@ -24,6 +24,9 @@ class Transport {
   // Returns the number delivered (0 on timeout or interruption).
   virtual int handle(int timeout_ms) = 0;
   virtual std::string url() const = 0;
+  // A descriptor that polls readable while messages wait for handle(); -1 when there is
+  // none. Lets one thread block on several transports at once (hybrid_transport.hpp).
+  virtual int wait_fd() const { return -1; }
 
   // Recovery (a mediator that keeps each channel's history, see nats_transport.hpp).
   virtual bool keeps_history() const { return false; }

@@ -14,6 +14,7 @@
 #include "couple/launcher.hpp"
 #include "couple/model_config.hpp"
 #include "couple/monolithic.hpp"
+#include "couple/transport.hpp"
 #include "test_util.hpp"
 
 // The example's model functions, compiled straight into this test.
@@ -217,4 +218,58 @@ TEST(DistributedRun, AModelThatThrowsStopsTheRunWithItsNameAndKeepsTheLog) {
     auto ch = read_log(lo.record, sc);
     EXPECT_EQ(ch["Y"].size(), 5u);  // steps 0-4 were recorded
   }
+}
+
+namespace {
+// Which channels an in-process bus carried during a run (a listener attached before it).
+struct BusListener {
+  std::unique_ptr<Transport> endpoint;
+  std::map<std::string, int> count;
+  explicit BusListener(const std::string& url) : endpoint(make_transport(url)) {
+    endpoint->subscribe("", [this](const std::string& ch, const uint8_t*, std::size_t) { ++count[ch]; });
+  }
+  void drain() {
+    while (endpoint->handle(0) > 0) {
+    }
+  }
+};
+}  // namespace
+
+TEST(DistributedRun, HybridRunEqualsTheHandWrittenLoopAndKeepsLocalChannelsOffTheMediator) {
+  // scenario-hybrid.yaml with both buses in process: the mediator's role on one memq bus,
+  // the building group's LCM on another.
+  ScenarioConfig sc = load_scenario(couple_test::kExample + "/scenario-hybrid.yaml");
+  for (auto& m : sc.models) m.end_time = 10;  // 1000 steps
+  sc.transport = "memq://hybrid_main";
+  sc.local_transport = "memq://hybrid_local";
+  ASSERT_EQ(sc.local_url("building"), "memq://hybrid_local-building");
+  const Series ref = hand_written_loop(sc);
+  {
+    // Recorded: the local channels are bridged to the main bus for the recorder.
+    const auto dir = couple_test::temp_dir("hybrid_memq");
+    LaunchOptions lo;
+    lo.record = dir / "run.lcmlog";
+    lo.show_progress = false;
+    launch(sc, lo);
+    auto ch = read_log(lo.record, sc);
+    std::size_t rows = 0;
+    EXPECT_LE(compare(ref, ch, &rows), 1e-12);
+    EXPECT_EQ(rows, 1000u);
+  }
+  // Not recorded: STRUCTURE and CONTROL only on the group's bus, WIND only on the main one.
+  BusListener main("memq://hybrid_main"), local("memq://hybrid_local-building");
+  LaunchOptions lo;
+  lo.show_progress = false;
+  const LaunchResult r = launch(sc, lo);
+  EXPECT_EQ(r.model_steps.at("structure"), 1000);
+  main.drain();
+  local.drain();
+  EXPECT_GE(main.count["WIND"], 1000);
+  EXPECT_GT(main.count["BUILTSCENE_STATUS.structure"], 0);  // statuses go through the mediator
+  EXPECT_EQ(local.count["BUILTSCENE_STATUS.structure"], 0);
+  EXPECT_EQ(main.count["STRUCTURE"], 0);
+  EXPECT_EQ(main.count["CONTROL"], 0);
+  EXPECT_GE(local.count["STRUCTURE"], 1000);
+  EXPECT_GE(local.count["CONTROL"], 1000);
+  EXPECT_EQ(local.count["WIND"], 0);
 }

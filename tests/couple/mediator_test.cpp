@@ -84,7 +84,7 @@ Conformance check_grants(const std::filesystem::path& log, const ScenarioConfig&
   std::set<std::pair<std::string, int64_t>> seen;
   LcmLogReader r(log);
   while (auto e = r.next()) {
-    if (e->channel == kStatusChannel) {
+    if (is_status_channel(e->channel)) {
       const auto s = decode_status(types, e->data.data(), e->data.size());
       granted[s.model] = std::max(granted[s.model], s.granted);
       continue;

@@ -150,3 +150,68 @@ TEST(ModelConfig, TheExampleLoads) {
   EXPECT_EQ(sc.models.size(), 3u);
   EXPECT_EQ(sc.model("structure").steps(), 6000);
 }
+
+namespace {
+// A hybrid scenario: p publishes A, q reads A and publishes B; `models` and `local` as given.
+std::string load_hybrid(const std::string& tag, const std::string& models, const std::string& local,
+                        ScenarioConfig* out = nullptr) {
+  const auto d = couple_test::temp_dir(tag);
+  write(d / "types.lcm", kTypes);
+  write(d / "p.yaml", model("p", kPubA));
+  write(d / "q.yaml", model("q", kPubB + "subscribe:\n  - channel: A\n    type: t.a_t\n"));
+  write(d / "scenario.yaml", "name: s\ntransport: memq://x\n" + local + "models:\n" + models);
+  try {
+    const ScenarioConfig sc = load_scenario(d / "scenario.yaml");
+    if (out) *out = sc;
+    return "";
+  } catch (const InputError& e) {
+    return e.what();
+  }
+}
+const std::string kGrouped = "  - {config: p.yaml, group: g1}\n  - {config: q.yaml, group: g1}\n";
+}  // namespace
+
+TEST(ModelConfig, HybridGroupsGetOneMulticastPortEach) {
+  ScenarioConfig sc;
+  ASSERT_EQ(load_hybrid("hybrid_ok", "  - {config: p.yaml, group: g1}\n  - {config: q.yaml, group: g2}\n",
+                        "local:\n  transport: udpm://239.255.76.67:7700?ttl=0\n  channels: [A, B]\n", &sc),
+            "");
+  EXPECT_TRUE(sc.is_local("A"));
+  EXPECT_FALSE(sc.is_local("BUILTSCENE_STATUS"));
+  EXPECT_EQ(sc.model("q").group, "g2");
+  EXPECT_EQ(sc.local_url("g1"), "udpm://239.255.76.67:7700?ttl=0");
+  EXPECT_EQ(sc.local_url("g2"), "udpm://239.255.76.67:7701?ttl=0");
+  EXPECT_THROW(sc.local_url("g3"), InputError);
+}
+
+TEST(ModelConfig, HybridBadInputNamesTheFileAndField) {
+  const std::string local = "local:\n  channels: [A]\n";
+  auto e = load_hybrid("hybrid_nogroup", "  - p.yaml\n  - {config: q.yaml, group: g1}\n", local);
+  EXPECT_TRUE(has(e, "scenario.yaml:4: field 'local.channels': channel 'A' is local but its producer 'p' is in no group"))
+      << e;
+  e = load_hybrid("hybrid_unknown", kGrouped, "local:\n  channels: [A, C]\n");
+  EXPECT_TRUE(has(e, "scenario.yaml:") && has(e, "field 'local.channels': no model publishes channel 'C'")) << e;
+  e = load_hybrid("hybrid_status", kGrouped, "local:\n  channels: [BUILTSCENE_STATUS]\n");
+  EXPECT_TRUE(has(e, "the status channel always goes through the mediator")) << e;
+  e = load_hybrid("hybrid_url", kGrouped, "local:\n  transport: nats://127.0.0.1:4222\n  channels: [A]\n");
+  EXPECT_TRUE(has(e, "scenario.yaml:4: field 'local.transport'")) << e;
+  e = load_hybrid("hybrid_empty", kGrouped, "local:\n  channels: []\n");
+  EXPECT_TRUE(has(e, "field 'local.channels' must be a non-empty list")) << e;
+  e = load_hybrid("hybrid_key", kGrouped, "local:\n  channel: [A]\n");
+  EXPECT_TRUE(has(e, "unknown field 'local.channel'")) << e;
+  e = load_hybrid("hybrid_entry", "  - {config: p.yaml, grup: g1}\n  - q.yaml\n", local);
+  EXPECT_TRUE(has(e, "scenario.yaml:6: unknown field 'models[0].grup'")) << e;
+  e = load_hybrid("hybrid_ports", kGrouped, "local:\n  transport: udpm://239.255.76.67:65535?ttl=0\n  channels: [A]\n");
+  EXPECT_EQ(e, "");  // one group fits in the last port
+  e = load_hybrid("hybrid_ports2", "  - {config: p.yaml, group: g1}\n  - {config: q.yaml, group: g2}\n",
+                  "local:\n  transport: udpm://239.255.76.67:65535?ttl=0\n  channels: [A]\n");
+  EXPECT_TRUE(has(e, "2 groups need ports up to 65536")) << e;
+}
+
+TEST(ModelConfig, CheckpointEveryMustBeAWholeNonNegativeNumberOfSteps) {
+  auto e = load("ckpt_neg", {{"p.yaml", model("p", kPubA + "checkpoint_every: -5\n")}});
+  EXPECT_TRUE(has(e, "p.yaml:") && has(e, "field 'checkpoint_every' must not be negative")) << e;
+  e = load("ckpt_text", {{"p.yaml", model("p", kPubA + "checkpoint_every: often\n")}});
+  EXPECT_TRUE(has(e, "p.yaml:") && has(e, "field 'checkpoint_every' has a bad value")) << e;
+  EXPECT_EQ(load("ckpt_ok", {{"p.yaml", model("p", kPubA + "checkpoint_every: 3\n")}}), "");
+}

@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <optional>
 #include <nlohmann/json.hpp>
 #include <string>
 
@@ -61,6 +62,26 @@ inline std::map<std::string, std::map<int64_t, nlohmann::json>> read_log(const s
   }
   return out;
 }
+
+// Runs `script` (sh) in a private network namespace whose loopback carries the multicast
+// route LCM udpm needs; nullopt (and the reason in `why`) where namespaces are not permitted.
+inline std::optional<RunResult> in_udpm_namespace(const std::string& script, std::string* why) {
+  static const RunResult probe =
+      run("unshare -n sh -c 'ip link set lo up && ip route add 224.0.0.0/4 dev lo && echo ok'");
+  if (probe.code != 0 || probe.out.find("ok") == std::string::npos) {
+    *why = "udpm tests run in a private network namespace with a loopback multicast route; "
+           "creating one failed (needs root and unshare/ip from util-linux/iproute2): " + probe.out;
+    return std::nullopt;
+  }
+  const auto dir = temp_dir("script");
+  write(dir / "run.sh", "set -e\nip link set lo up\nip route add 224.0.0.0/4 dev lo\n" + script);
+  return run("unshare -n sh " + (dir / "run.sh").string());
+}
+
+#define UDPM_OR_SKIP(result, script)                           \
+  std::string why;                                             \
+  auto result = couple_test::in_udpm_namespace(script, &why);  \
+  if (!result) GTEST_SKIP() << why;
 
 // Processes whose command line mentions `dir` (the pattern does not match pgrep's own shell).
 inline std::string left_over(const std::filesystem::path& dir) {

@@ -23,25 +23,6 @@ namespace {
 
 const std::string kBin = BUILTSCENE_BINARY;
 
-// Runs `script` (sh) where LCM udpm works; nullopt (and the reason) where it cannot.
-std::optional<couple_test::RunResult> in_udpm_namespace(const std::string& script, std::string* why) {
-  static const couple_test::RunResult probe =
-      couple_test::run("unshare -n sh -c 'ip link set lo up && ip route add 224.0.0.0/4 dev lo && echo ok'");
-  if (probe.code != 0 || probe.out.find("ok") == std::string::npos) {
-    *why = "udpm tests run in a private network namespace with a loopback multicast route; "
-           "creating one failed (needs root and unshare/ip from util-linux/iproute2): " + probe.out;
-    return std::nullopt;
-  }
-  const auto dir = couple_test::temp_dir("script");
-  couple_test::write(dir / "run.sh", "set -e\nip link set lo up\nip route add 224.0.0.0/4 dev lo\n" + script);
-  return couple_test::run("unshare -n sh " + (dir / "run.sh").string());
-}
-
-#define UDPM_OR_SKIP(result, script)                \
-  std::string why;                                  \
-  auto result = in_udpm_namespace(script, &why);    \
-  if (!result) GTEST_SKIP() << why;
-
 using couple_test::left_over;
 using couple_test::read_log;
 

@@ -29,6 +29,14 @@ int builtscene_model_step(void* model, int64_t step, double t, const bs_buffer* 
                           bs_emit_fn emit, void* context, char* error, size_t error_size);
 void builtscene_model_destroy(void* model);
 
+/* Optional checkpoint hooks (a plugin may lack them; the wrapper then resumes a restarted
+ * model by replaying its inputs from step 0). can_checkpoint says whether the model
+ * defines its save and load functions; save emits the state's bytes as output 0; load
+ * restores a state from such bytes. */
+int builtscene_model_can_checkpoint(void);
+int builtscene_model_save(void* model, bs_emit_fn emit, void* context, char* error, size_t error_size);
+int builtscene_model_load(void* model, const unsigned char* data, size_t size, char* error, size_t error_size);
+
 #ifdef __cplusplus
 }
 #endif

@@ -69,3 +69,36 @@ extern "C" int builtscene_model_step(void* model, int64_t step, double t, const 
 }
 
 extern "C" void builtscene_model_destroy(void* model) { controller_free(static_cast<ControllerState*>(model)); }
+
+extern "C" int builtscene_model_can_checkpoint(void) { return controller_save != nullptr && controller_load != nullptr; }
+
+extern "C" int builtscene_model_save(void* model, bs_emit_fn emit, void* context, char* error,
+                                      size_t error_size) {
+  try {
+    std::string bytes;
+    if (!controller_save || !controller_save(*static_cast<const ControllerState*>(model), bytes))
+      throw std::runtime_error("controller_save failed");
+    emit(context, 0, reinterpret_cast<const unsigned char*>(bytes.data()), bytes.size());
+    return 0;
+  } catch (const std::exception& e) {
+    set_error(error, error_size, e.what());
+  } catch (...) {
+    set_error(error, error_size, "unknown exception");
+  }
+  return 1;
+}
+
+extern "C" int builtscene_model_load(void* model, const unsigned char* data, size_t size, char* error,
+                                      size_t error_size) {
+  try {
+    const std::string bytes(reinterpret_cast<const char*>(data), size);
+    if (!controller_load || !controller_load(*static_cast<ControllerState*>(model), bytes))
+      throw std::runtime_error("controller_load failed");
+    return 0;
+  } catch (const std::exception& e) {
+    set_error(error, error_size, e.what());
+  } catch (...) {
+    set_error(error, error_size, "unknown exception");
+  }
+  return 1;
+}

@@ -4,6 +4,7 @@
 // time step `step` (time t = step * 0.01) when all inputs of the step are there.
 #pragma once
 #include <cstdint>
+#include <string>
 #include <vector>
 #include <nlohmann/json.hpp>
 
@@ -23,3 +24,10 @@ void controller(ControllerState& state, int64_t step, double t,
     const decltype(wsc::wind_t::U)& U,
     const decltype(wsc::wind_t::P)& P,
     decltype(wsc::control_t::Pc)& Pc);
+
+// Optional checkpoint hooks. Define both in controller.cpp and set `checkpoint_every: STEPS`
+// in the config: a restarted model then resumes from its last checkpoint instead of
+// replaying its inputs from step 0. save writes everything the state keeps between steps
+// into `bytes`, load restores it; return false on error. (Weak: a model without them builds.)
+__attribute__((weak)) bool controller_save(const ControllerState& state, std::string& bytes);
+__attribute__((weak)) bool controller_load(ControllerState& state, const std::string& bytes);

@@ -4,6 +4,7 @@
 // time step `step` (time t = step * 0.01) when all inputs of the step are there.
 #pragma once
 #include <cstdint>
+#include <string>
 #include <vector>
 #include <nlohmann/json.hpp>
 
@@ -26,3 +27,10 @@ void structure(StructureState& state, int64_t step, double t,
     decltype(wsc::response_t::D)& D,
     decltype(wsc::response_t::V)& V,
     decltype(wsc::response_t::A)& A);
+
+// Optional checkpoint hooks. Define both in structure.cpp and set `checkpoint_every: STEPS`
+// in the config: a restarted model then resumes from its last checkpoint instead of
+// replaying its inputs from step 0. save writes everything the state keeps between steps
+// into `bytes`, load restores it; return false on error. (Weak: a model without them builds.)
+__attribute__((weak)) bool structure_save(const StructureState& state, std::string& bytes);
+__attribute__((weak)) bool structure_load(StructureState& state, const std::string& bytes);

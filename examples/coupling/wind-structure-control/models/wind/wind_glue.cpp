@@ -66,3 +66,36 @@ extern "C" int builtscene_model_step(void* model, int64_t step, double t, const 
 }
 
 extern "C" void builtscene_model_destroy(void* model) { wind_free(static_cast<WindState*>(model)); }
+
+extern "C" int builtscene_model_can_checkpoint(void) { return wind_save != nullptr && wind_load != nullptr; }
+
+extern "C" int builtscene_model_save(void* model, bs_emit_fn emit, void* context, char* error,
+                                      size_t error_size) {
+  try {
+    std::string bytes;
+    if (!wind_save || !wind_save(*static_cast<const WindState*>(model), bytes))
+      throw std::runtime_error("wind_save failed");
+    emit(context, 0, reinterpret_cast<const unsigned char*>(bytes.data()), bytes.size());
+    return 0;
+  } catch (const std::exception& e) {
+    set_error(error, error_size, e.what());
+  } catch (...) {
+    set_error(error, error_size, "unknown exception");
+  }
+  return 1;
+}
+
+extern "C" int builtscene_model_load(void* model, const unsigned char* data, size_t size, char* error,
+                                      size_t error_size) {
+  try {
+    const std::string bytes(reinterpret_cast<const char*>(data), size);
+    if (!wind_load || !wind_load(*static_cast<WindState*>(model), bytes))
+      throw std::runtime_error("wind_load failed");
+    return 0;
+  } catch (const std::exception& e) {
+    set_error(error, error_size, e.what());
+  } catch (...) {
+    set_error(error, error_size, "unknown exception");
+  }
+  return 1;
+}

@@ -4,6 +4,7 @@
 // time step `step` (time t = step * 0.01) when all inputs of the step are there.
 #pragma once
 #include <cstdint>
+#include <string>
 #include <vector>
 #include <nlohmann/json.hpp>
 
@@ -17,3 +18,10 @@ void wind_free(WindState* state);
 void wind(WindState& state, int64_t step, double t,
     decltype(wsc::wind_t::U)& U,
     decltype(wsc::wind_t::P)& P);
+
+// Optional checkpoint hooks. Define both in wind.cpp and set `checkpoint_every: STEPS`
+// in the config: a restarted model then resumes from its last checkpoint instead of
+// replaying its inputs from step 0. save writes everything the state keeps between steps
+// into `bytes`, load restores it; return false on error. (Weak: a model without them builds.)
+__attribute__((weak)) bool wind_save(const WindState& state, std::string& bytes);
+__attribute__((weak)) bool wind_load(WindState& state, const std::string& bytes);

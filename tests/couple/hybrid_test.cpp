@@ -1,0 +1,129 @@
+// The hybrid platform (the source's Figure 5.4) end to end, every model its own process:
+// the building's sub-models (structure, controller) exchange STRUCTURE and CONTROL over
+// LCM udpm, the wind reaches them through the mediator. Each test runs in a private
+// network namespace (multicast route on its loopback; the launcher's nats-server on
+// 127.0.0.1 inside it), so parallel runs cannot hear each other.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "couple/model_config.hpp"
+#include "couple/monolithic.hpp"
+#include "test_util.hpp"
+
+using namespace builtscene::couple;
+using nlohmann::json;
+
+namespace {
+
+const std::string kBin = BUILTSCENE_BINARY;
+const std::string kScenario = couple_test::kExample + "/scenario-hybrid.yaml";
+
+double rel(double a, double b) { return a == b ? 0 : std::abs(a - b) / std::max(std::abs(a), std::abs(b)); }
+
+// The largest relative difference of `got` against the monolithic reference over every
+// member of the steps `got` holds; `missing` counts reference steps `got` lacks.
+double worst_difference(std::map<std::string, std::map<int64_t, json>>& got, const std::vector<std::string>& channels,
+                        std::size_t* compared, std::size_t* missing) {
+  static const auto ref = run_monolithic(load_scenario(kScenario));
+  double worst = 0;
+  *compared = *missing = 0;
+  for (const auto& ch : channels)
+    for (const auto& [n, v] : ref.at(ch)) {
+      if (n < 0) continue;
+      if (!got[ch].count(n)) {
+        ++*missing;
+        continue;
+      }
+      for (const auto& [k, x] : v.items())
+        if (k != "step") {
+          worst = std::max(worst, rel(x.get<double>(), got[ch][n][k].get<double>()));
+          ++*compared;
+        }
+    }
+  return worst;
+}
+
+}  // namespace
+
+TEST(Hybrid, ExampleOverLcmAndTheMediatorEqualsTheMonolithicReference) {
+  const auto dir = couple_test::temp_dir("hybrid_example");
+  UDPM_OR_SKIP(r, "TMPDIR=" + dir.string() + " " + kBin + " couple launch " + kScenario + " --record " +
+                      (dir / "run.lcmlog").string() + " --json > " + (dir / "out.json").string());
+  ASSERT_EQ(r->code, 0) << r->out;
+  const json summary = json::parse(std::ifstream(dir / "out.json"));
+  EXPECT_EQ(summary["steps"], 6000);
+  EXPECT_EQ(summary["models"]["structure"], 6000);
+  EXPECT_EQ(summary["transport"].get<std::string>().rfind("nats://127.0.0.1:", 0), 0u) << summary.dump();
+  // The recorder hears the local channels through the bridge; all steps must be there.
+  auto got = couple_test::read_log(dir / "run.lcmlog", load_scenario(kScenario));
+  std::size_t compared = 0, missing = 0;
+  const double worst = worst_difference(got, {"WIND", "STRUCTURE", "CONTROL"}, &compared, &missing);
+  EXPECT_EQ(missing, 0u);
+  EXPECT_EQ(compared, 6000u * 6);
+  EXPECT_LE(worst, 1e-12);
+  std::printf("hybrid vs monolithic: max relative difference %.3g, %.0f steps/s, nats-server CPU %.2f s\n", worst,
+              summary["steps_per_second"].get<double>(), summary["mediator_cpu_seconds"].get<double>());
+  EXPECT_EQ(couple_test::left_over(dir), "");
+}
+
+TEST(Hybrid, LocalChannelsTravelOnlyOverLcmAndTheOthersThroughTheMediator) {
+  // Second tools watch both sides of an unrecorded run: lcm-logger on the building's
+  // multicast group (port 7668, group 0), the spy on the mediator (a nats-server with
+  // JetStream this script starts on a fixed port: the namespace is private).
+  const auto dir = couple_test::temp_dir("hybrid_routes");
+  const std::string d = dir.string(), err = d + "/spy.err";
+  // Every background process is stopped on any way out (set -e) and keeps no handle on
+  // the test's output pipe.
+  UDPM_OR_SKIP(r, "nats-server -a 127.0.0.1 -p 4222 -js -sd " + d + "/js -l " + d + "/server.log > /dev/null 2>&1 & N=$!\n"
+                  "trap 'kill $N $L $S 2>/dev/null || true' EXIT\n"
+                  "for i in $(seq 100); do grep -q 'Server is ready' " + d + "/server.log 2>/dev/null && break; sleep 0.1; done\n"
+                  "lcm-logger --lcm-url='udpm://239.255.76.67:7668?ttl=0' -f " + d + "/local.lcmlog > /dev/null 2>&1 & L=$!\n" +
+                  kBin + " couple spy --url nats://127.0.0.1:4222 --scenario " + kScenario + " --duration 120 --json > " +
+                  d + "/spy.json 2> " + err + " & S=$!\n"
+                  "for i in $(seq 300); do grep -q listening " + err + " && break; sleep 0.1; done\nsleep 0.3\n" +
+                  kBin + " couple launch " + kScenario + " --nats nats://127.0.0.1:4222 --json > " + d + "/out.json\n"
+                  "sleep 0.5\nkill -INT $S\nwait $S\nkill -INT $L\nwait $L || true\nkill $N\nwait $N || true\n");
+  ASSERT_EQ(r->code, 0) << r->out;
+  const json spy = json::parse(std::ifstream(dir / "spy.json"));
+  // (a few more than 6000: the wrapper re-sends a step a consumer reports waiting for)
+  EXPECT_GE(spy["channels"]["WIND"]["messages"].get<int>(), 6000) << spy.dump();
+  EXPECT_EQ(spy["channels"]["WIND"]["last_step"].get<int>(), 5999) << spy.dump();
+  for (const std::string m : {"wind", "structure", "controller"})
+    EXPECT_GT(spy["channels"]["BUILTSCENE_STATUS." + m]["messages"].get<int>(), 0) << spy.dump();
+  EXPECT_FALSE(spy["channels"].contains("STRUCTURE")) << spy.dump();
+  EXPECT_FALSE(spy["channels"].contains("CONTROL")) << spy.dump();
+  // The spy shows each model's granted time: the wind has no inputs (unbounded: null);
+  // the building's sub-models were granted past their last step (or, done, unbounded).
+  ASSERT_TRUE(spy["models"].contains("wind")) << spy.dump();
+  EXPECT_TRUE(spy["models"]["wind"]["granted"].is_null()) << spy.dump();
+  for (const std::string m : {"structure", "controller"}) {
+    const json g = spy["models"][m]["granted"];
+    EXPECT_TRUE(g.is_null() || g.get<double>() >= 59.99 - 1e-9) << m << ": " << spy.dump();
+    EXPECT_EQ(spy["models"][m]["step"], 6000) << spy.dump();
+  }
+  // lcm-logger is a plain UDP listener (no re-sends): on a loaded machine the kernel may
+  // drop datagrams while it is descheduled (as in Udpm.LcmLogplayer...), so at least half
+  // the steps must be there, each equal to the reference; the wind never appears on LCM.
+  auto local = couple_test::read_log(dir / "local.lcmlog", load_scenario(kScenario));
+  EXPECT_EQ(local.count("WIND"), 0u);
+  EXPECT_GE(local["STRUCTURE"].size(), 3000u);
+  EXPECT_GE(local["CONTROL"].size(), 3000u);
+  std::size_t compared = 0, missing = 0;
+  EXPECT_LE(worst_difference(local, {"STRUCTURE", "CONTROL"}, &compared, &missing), 1e-12);
+  EXPECT_EQ(compared, 3 * local["STRUCTURE"].size() + local["CONTROL"].size());  // D, V, A and Pc of each
+  EXPECT_EQ(missing, 12000 - local["STRUCTURE"].size() - local["CONTROL"].size());
+  std::printf("lcm-logger heard %zu STRUCTURE and %zu CONTROL messages on the local group\n",
+              local["STRUCTURE"].size(), local["CONTROL"].size());
+  EXPECT_EQ(couple_test::left_over(dir), "");
+}
+
+TEST(Hybrid, KillingASubModelThatReadsLocalChannelsIsRefused) {
+  const auto r = couple_test::run(kBin + " couple launch " + kScenario + " --kill controller@100");
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("--kill controller@100: model 'controller' reads the local channel 'STRUCTURE'"),
+            std::string::npos)
+      << r.out;
+}
