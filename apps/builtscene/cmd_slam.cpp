@@ -154,10 +154,14 @@ nlohmann::json run_slam(const SlamOptions& opt) {
     if (e.stage != slam::LoopEvent::Stage::kPoseGraph) continue;
     loop_frames.push_back(e.frame);
     const double angle = Eigen::AngleAxisd(e.correction.rotation()).angle();
+    nlohmann::json matched_timestamp = nullptr;
+    for (const auto& k : e.keyframes)
+      if (k.id == e.matched_keyframe) matched_timestamp = k.timestamp;
     loop_list.push_back({{"frame", e.frame},
                          {"timestamp", e.timestamp},
                          {"keyframe", e.keyframe},
                          {"matched_keyframe", e.matched_keyframe},
+                         {"matched_timestamp", matched_timestamp},
                          {"inliers", e.inliers},
                          {"correction_m", e.correction.translation().norm()},
                          {"correction_deg", angle * 180.0 / M_PI}});
