@@ -22,17 +22,17 @@ namespace fs = std::filesystem;
 using builtscene::testing::run_cli;
 using builtscene::testing::shell_quote;
 
-struct Run {
+struct SlamRun {
   nlohmann::json summary;
   test::AteResult ate;
 };
 
-Run run_slam(const fs::path& world, const std::string& extra) {
+SlamRun run_slam(const fs::path& world, const std::string& extra) {
   const auto traj = world / ("estimate" + std::to_string(extra.size()) + ".txt");
   const auto r = run_cli("slam --json --sync-mapping --dataset " + shell_quote(world) + " --trajectory " +
                          shell_quote(traj) + " " + extra);
   EXPECT_EQ(r.exit_code, 0) << r.err;
-  Run out;
+  SlamRun out;
   if (r.exit_code != 0) return out;
   out.summary = nlohmann::json::parse(r.out);
   out.ate = test::absolute_trajectory_error(read_tum_trajectory(world / "groundtruth.txt"), read_tum_trajectory(traj));
@@ -58,8 +58,8 @@ TEST(LoopClosing, TwoLoopsOfTheLabRoomAreClosedAndTheErrorDrops) {
   ASSERT_EQ(g.exit_code, 0) << g.err;
 
   // The occupancy grid rides along on the loop-closing run: it must rebuild after loops.
-  const Run on = run_slam(world, "--ogm-out " + shell_quote((world / "grid").string()));
-  const Run off = run_slam(world, "--no-loop-closing");
+  const SlamRun on = run_slam(world, "--ogm-out " + shell_quote((world / "grid").string()));
+  const SlamRun off = run_slam(world, "--no-loop-closing");
   ASSERT_FALSE(on.summary.is_null());
   ASSERT_FALSE(off.summary.is_null());
   std::printf("loop closing on: %d loops, tracked %d/%d, ATE RMSE %.2f cm; off: %d loops, tracked %d/%d, ATE RMSE %.2f cm\n",
