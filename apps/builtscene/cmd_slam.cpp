@@ -197,6 +197,7 @@ nlohmann::json run_slam(const SlamOptions& opt) {
         {"keyframes_checked", lc.keyframes_checked},
         {"consistent_candidates", lc.consistent_candidates},
         {"rejected", lc.rejected},
+        {"rejected_anchored", lc.rejected_anchored},
         {"points_fused", lc.points_fused},
         {"global_ba_runs", lc.global_ba_runs},
         {"global_ba_aborted", lc.global_ba_aborted},

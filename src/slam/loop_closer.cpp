@@ -1,6 +1,7 @@
 #include "slam/loop_closer.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <set>
 #include <unordered_map>
 #include <unordered_set>
@@ -215,6 +216,21 @@ std::unique_ptr<LoopCloser::LoopMatch> LoopCloser::verify(KeyFrame& kf, KeyFrame
   optimize_frame_pose(frame);
   good = keep_inliers(frame);
   if (good < opt_.min_inliers) return nullptr;
+  bool anchored = false;
+  for (const auto& [n, w] : kf.connections) anchored |= !n->bad && n->id < kf.id - opt_.min_keyframe_gap;
+  if (anchored) {
+    const SE3 correction = frame.T_cw.inverse() * T1;
+    const double angle_deg = Eigen::AngleAxisd(correction.rotation()).angle() * 180.0 / M_PI;
+    const double moved = (frame.camera_center() - kf.camera_center()).norm();
+    if (moved > opt_.max_anchored_correction_m || angle_deg > opt_.max_anchored_correction_deg) {
+      spdlog::info("loop candidate {} for keyframe {} (frame {}) rejected: {} inliers, but it would move a keyframe "
+                   "tied to older ones by {:.2f} m / {:.1f} deg",
+                   cand.id, kf.id, kf.frame_id, good, moved, angle_deg);
+      std::lock_guard s(stats_mutex_);
+      ++stats_.rejected_anchored;
+      return nullptr;
+    }
+  }
   auto m = std::make_unique<LoopMatch>();
   m->candidate = cand.shared_from_this();
   m->T_cw = frame.T_cw;
