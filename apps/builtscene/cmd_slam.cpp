@@ -3,6 +3,7 @@
 // (--map-in), saves the map (--map-out), and switches between SLAM and localization mode by
 // frame range (--mode-schedule) or by region on the ground plane (--slam-region).
 #include <chrono>
+#include <cmath>
 #include <fstream>
 #include <memory>
 
@@ -34,6 +35,7 @@ struct SlamOptions {
   double camera_height = 1.0;
   std::filesystem::path vocabulary;
   bool no_relocalization = false;
+  bool no_loop_closing = false;
   SlamOgmOptions ogm;
 };
 
@@ -62,6 +64,7 @@ nlohmann::json run_slam(const SlamOptions& opt) {
   so.mapping_thread = !opt.sync_mapping;
   so.vocabulary = opt.vocabulary;
   so.relocalization = !opt.no_relocalization;
+  so.loop_closing = !opt.no_loop_closing;
   // Fail on an unwritable output before spending minutes on the sequence.
   const auto start_mode = slam::parse_mode(opt.mode);
   if (!start_mode) throw InputError("--mode: '" + opt.mode + "' must be slam or localize");
@@ -79,6 +82,7 @@ nlohmann::json run_slam(const SlamOptions& opt) {
     ogm.emplace(ogm_options, data.settings().camera);
   }
   slam::System system(data.settings(), so);
+  if (ogm) ogm->subscribe(system);
   nlohmann::json map_in_json = nullptr;
   if (!opt.map_in.empty()) {
     const auto t0 = std::chrono::steady_clock::now();
@@ -145,6 +149,24 @@ nlohmann::json run_slam(const SlamOptions& opt) {
   nlohmann::json bad_input = frames.bad_input();
   bad_input["no_features"] = no_features;
   const double frame_median = system.timer().median_ms("frame");
+  nlohmann::json loop_frames = nlohmann::json::array(), loop_list = nlohmann::json::array();
+  for (const auto& e : system.loop_events()) {
+    if (e.stage != slam::LoopEvent::Stage::kPoseGraph) continue;
+    loop_frames.push_back(e.frame);
+    const double angle = Eigen::AngleAxisd(e.correction.rotation()).angle();
+    nlohmann::json matched_timestamp = nullptr;
+    for (const auto& k : e.keyframes)
+      if (k.id == e.matched_keyframe) matched_timestamp = k.timestamp;
+    loop_list.push_back({{"frame", e.frame},
+                         {"timestamp", e.timestamp},
+                         {"keyframe", e.keyframe},
+                         {"matched_keyframe", e.matched_keyframe},
+                         {"matched_timestamp", matched_timestamp},
+                         {"inliers", e.inliers},
+                         {"correction_m", e.correction.translation().norm()},
+                         {"correction_deg", angle * 180.0 / M_PI}});
+  }
+  const auto lc = system.loop_closing_stats();
   nlohmann::json j = {
       {"frames", n},
       {"processed_frames", processed},
@@ -169,6 +191,17 @@ nlohmann::json run_slam(const SlamOptions& opt) {
         {"max_queue", stats.max_queue}}},
       {"relocalizations", {{"count", relocalized.size()}, {"frames", relocalized}}},
       {"depth_odometry_frames", system.depth_odometry_frames()},
+      {"loops", {{"count", loop_frames.size()}, {"frames", loop_frames}, {"events", loop_list}}},
+      {"loop_closing",
+       {{"enabled", system.loop_closing_enabled()},
+        {"keyframes_checked", lc.keyframes_checked},
+        {"consistent_candidates", lc.consistent_candidates},
+        {"rejected", lc.rejected},
+        {"rejected_anchored", lc.rejected_anchored},
+        {"points_fused", lc.points_fused},
+        {"global_ba_runs", lc.global_ba_runs},
+        {"global_ba_aborted", lc.global_ba_aborted},
+        {"global_ba_merged", lc.global_ba_merged}}},
       {"vocabulary", system.vocabulary() ? so.vocabulary.empty() ? slam::default_vocabulary_path().string() : so.vocabulary.string() : ""},
       {"mode_switches", switches},
       {"map_in", map_in_json},
@@ -214,6 +247,8 @@ const bool registered = register_command({
                      "Bag-of-words vocabulary for relocalization (default: the shipped data/vocab/orb_k10_L4.bsvoc)");
       cmd.add_flag("--no-relocalization", opt->no_relocalization,
                    "When lost, only match the last reference keyframe (no place recognition)");
+      cmd.add_flag("--no-loop-closing", opt->no_loop_closing,
+                   "No loop detection and correction (the map drifts freely; for comparison)");
       cmd.add_option("--ogm-out", opt->ogm.out,
                      "Output: occupancy grid built live from keyframes (MAP.yaml, .pgm, .state, .png)");
       cmd.add_option("--ogm-world", opt->ogm.world,

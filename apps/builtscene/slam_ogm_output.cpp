@@ -46,8 +46,30 @@ void SlamOgmOutput::consume(const PosesAndLaserScans& batch) {
   }
 }
 
+void SlamOgmOutput::subscribe(slam::System& system) {
+  system.subscribe_loop_events([this](const slam::LoopEvent&) {
+    std::lock_guard lock(loop_mutex_);
+    ++loop_events_pending_;
+  });
+}
+
+void SlamOgmOutput::rebuild_after_loops(slam::System& system) {
+  {
+    std::lock_guard lock(loop_mutex_);
+    if (loop_events_pending_ == 0) return;
+    loop_events_pending_ = 0;
+  }
+  if (!emitter_) return;  // no scan yet: the first keyframes will build from corrected poses
+  const auto start = std::chrono::steady_clock::now();
+  // Poses read now are the optimized ones (the event is sent after they were written).
+  consume(emitter_->full_batch(system.keyframe_trajectory()));
+  ++loop_rebuilds_;
+  system.timer().add("ogm", ms_since(start));
+}
+
 void SlamOgmOutput::after_frame(slam::System& system, const slam::TrackingOutcome& outcome, double timestamp,
                                 const cv::Mat& depth) {
+  rebuild_after_loops(system);
   if (!outcome.new_keyframe) return;
   const auto start = std::chrono::steady_clock::now();
   const Trajectory keyframes = system.keyframe_trajectory();
@@ -77,7 +99,7 @@ void SlamOgmOutput::after_frame(slam::System& system, const slam::TrackingOutcom
 }
 
 nlohmann::json SlamOgmOutput::finish(slam::System& system) {
-  nlohmann::json j = {{"batches", batches_}, {"full_batches", full_batches_}};
+  nlohmann::json j = {{"batches", batches_}, {"full_batches", full_batches_}, {"loop_rebuilds", loop_rebuilds_}};
   if (!emitter_) {
     spdlog::warn("occupancy grid: no keyframe with depth; no map written");
     j["map"] = nullptr;

@@ -5,6 +5,7 @@
 // keyframes with their optimized poses rebuilds it. Batches also go out over LCM (--lcm URL).
 #include <filesystem>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <string>
 
@@ -32,6 +33,10 @@ class SlamOgmOutput {
  public:
   SlamOgmOutput(SlamOgmOptions options, const PinholeCamera& camera);
 
+  // Registers for the SLAM's loop events: after each loop closure (and after the global BA
+  // that follows it) the grid is rebuilt from every keyframe's optimized pose. Call once,
+  // before the first frame; `system` must outlive this object's use of it.
+  void subscribe(slam::System& system);
   // After each tracked frame. `depth` is the frame's depth (CV_32F metres).
   void after_frame(slam::System& system, const slam::TrackingOutcome& outcome, double timestamp,
                    const cv::Mat& depth);
@@ -47,6 +52,13 @@ class SlamOgmOutput {
   std::vector<Pose2D> keyframe_poses_;
   long batches_ = 0, full_batches_ = 0, keyframes_drawn_ = 0;
   LaserScan last_scan_;
+  long loop_rebuilds_ = 0;
+  // Loop events arrive in the loop-closing thread; the emitter and the grid belong to the
+  // tracking thread, so events only raise this count (guarded by loop_mutex_) and
+  // after_frame() rebuilds.
+  std::mutex loop_mutex_;
+  long loop_events_pending_ = 0;
+  void rebuild_after_loops(slam::System& system);
 
   void consume(const PosesAndLaserScans& batch);
 };

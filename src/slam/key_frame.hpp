@@ -64,8 +64,12 @@ class KeyFrame : public std::enable_shared_from_this<KeyFrame> {
   BowVector bow;
   FeatureVector bow_features;
 
+  // Loop edges of the essential graph (both ends hold the edge). Keyframes with a loop edge
+  // are kept (`keep`), so these raw pointers never dangle.
+  std::set<KeyFrame*> loop_edges;
+
   bool bad = false;
-  bool keep = false;  // protected from culling (the first keyframe; later: loop candidates)
+  bool keep = false;  // protected from culling (the first keyframe, both ends of every loop)
   // Marks so a pass visits each keyframe once.
   long local_map_mark = -1, ba_local_mark = -1, ba_fixed_mark = -1, fuse_mark = -1;
 

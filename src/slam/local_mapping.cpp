@@ -40,7 +40,11 @@ LocalMapping::~LocalMapping() { finish(); }
 
 void LocalMapping::start() {
   if (thread_.joinable()) return;
-  stop_ = false;
+  {
+    std::lock_guard lock(queue_mutex_);
+    stop_ = false;
+    running_ = true;
+  }
   thread_ = std::thread([this] { run(); });
 }
 
@@ -64,8 +68,31 @@ void LocalMapping::run_pending() {
       queue_.pop_front();
     }
     process(kf);
+    if (output_ && !kf->bad) output_(kf);
   }
   idle_ = true;
+}
+
+void LocalMapping::request_pause() {
+  {
+    std::lock_guard lock(queue_mutex_);
+    pause_requested_ = true;
+  }
+  abort_ba_ = true;
+  queue_cv_.notify_all();
+}
+
+void LocalMapping::wait_until_paused() {
+  std::unique_lock lock(queue_mutex_);
+  pause_cv_.wait(lock, [this] { return paused_ || !running_; });
+}
+
+void LocalMapping::resume() {
+  {
+    std::lock_guard lock(queue_mutex_);
+    pause_requested_ = false;
+  }
+  queue_cv_.notify_all();
 }
 
 void LocalMapping::insert_keyframe(std::shared_ptr<KeyFrame> kf) {
@@ -100,13 +127,26 @@ void LocalMapping::run() {
     {
       std::unique_lock lock(queue_mutex_);
       idle_ = queue_.empty();
-      queue_cv_.wait(lock, [this] { return stop_ || !queue_.empty(); });
-      if (queue_.empty()) return;  // stop requested and nothing left
+      queue_cv_.wait(lock, [this] { return stop_ || pause_requested_ || !queue_.empty(); });
+      if (pause_requested_) {
+        // Parked between keyframes with no lock held: loop closing corrects the map now.
+        paused_ = true;
+        pause_cv_.notify_all();
+        queue_cv_.wait(lock, [this] { return !pause_requested_; });
+        paused_ = false;
+        continue;
+      }
+      if (queue_.empty()) {  // stop requested and nothing left
+        running_ = false;
+        pause_cv_.notify_all();
+        return;
+      }
       kf = queue_.front();
       queue_.pop_front();
       idle_ = false;
     }
     process(kf);
+    if (output_ && !kf->bad) output_(kf);
   }
 }
 

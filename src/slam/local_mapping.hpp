@@ -13,6 +13,7 @@
 #include <atomic>
 #include <condition_variable>
 #include <deque>
+#include <functional>
 #include <list>
 #include <memory>
 #include <mutex>
@@ -65,6 +66,18 @@ class LocalMapping : public KeyFrameSink {
   std::size_t queue_size() const override;
   void interrupt_bundle_adjustment() override { abort_ba_ = true; }
 
+  // Every keyframe that comes out of processing still good goes on to this (loop closing's
+  // queue). Called in the mapping thread (or by run_pending()); set before start().
+  void set_keyframe_output(std::function<void(std::shared_ptr<KeyFrame>)> output) { output_ = std::move(output); }
+
+  // Loop closing's handshake. request_pause() interrupts a running BA; the thread then parks
+  // between two keyframes, holding no lock, until resume(). wait_until_paused() returns once
+  // it is parked, or at once when no thread runs (inline mode, or after finish()). Keyframes
+  // inserted meanwhile wait in the queue. Callers must not hold the map lock while waiting.
+  void request_pause();
+  void wait_until_paused();
+  void resume();
+
   struct Stats {
     long keyframes_processed = 0;
     long keyframes_culled = 0;
@@ -89,6 +102,10 @@ class LocalMapping : public KeyFrameSink {
   std::thread thread_;
   std::atomic<bool> idle_{true};
   std::atomic<bool> abort_ba_{false};
+  std::function<void(std::shared_ptr<KeyFrame>)> output_;
+  // Pause handshake, guarded by queue_mutex_.
+  std::condition_variable pause_cv_;
+  bool pause_requested_ = false, paused_ = false, running_ = false;
 
   std::list<std::shared_ptr<MapPoint>> recent_points_;
   mutable std::mutex stats_mutex_;

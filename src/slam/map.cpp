@@ -37,6 +37,7 @@ void Map::clear() {
     kf->connections.clear();
     kf->ordered_connections.clear();
     kf->children.clear();
+    kf->loop_edges.clear();
     kf->parent.reset();
   }
   for (auto& [k, p] : points_) {

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstring>
 #include <fstream>
+#include <set>
 #include <unordered_map>
 #include <unordered_set>
 
@@ -32,8 +33,10 @@ constexpr std::uint32_t tag(const char (&s)[5]) {
          static_cast<std::uint32_t>(static_cast<unsigned char>(s[3])) << 24;
 }
 constexpr std::uint32_t kContextTag = tag("CTXT"), kKeyFramesTag = tag("KFRM"), kPointsTag = tag("MPTS"),
-                        kCovisibilityTag = tag("COVI");
-constexpr std::uint32_t kSectionOrder[] = {kContextTag, kKeyFramesTag, kPointsTag, kCovisibilityTag};
+                        kCovisibilityTag = tag("COVI"), kLoopEdgesTag = tag("LOOP");
+// Version 2 added the loop edges; version 1 files (no loop closing yet) still load.
+constexpr std::uint32_t kSectionOrder[] = {kContextTag, kKeyFramesTag, kPointsTag, kCovisibilityTag, kLoopEdgesTag};
+constexpr std::size_t section_count(std::uint32_t version) { return version >= 2 ? 5 : 4; }
 constexpr std::size_t kKeypointBytes = 7 * 4;
 
 std::string tag_name(std::uint32_t t) {
@@ -365,7 +368,20 @@ std::vector<std::uint8_t> encode_map(const Map& map, const FrameContext& ctx, st
     }
   }
 
-  const std::size_t body_size = 4 * 16 + context.bytes.size() + kfw.bytes.size() + pw.bytes.size() + cw.bytes.size();
+  Writer lw;
+  std::vector<std::pair<long, long>> loops;
+  for (const auto& kf : keyframes)
+    for (const KeyFrame* other : kf->loop_edges)
+      if (saved_kfs.count(other) && kf->id < other->id) loops.emplace_back(kf->id, other->id);
+  std::sort(loops.begin(), loops.end());
+  lw.put(static_cast<std::uint32_t>(loops.size()));
+  for (const auto& [a, b] : loops) {
+    lw.put(static_cast<std::int64_t>(a));
+    lw.put(static_cast<std::int64_t>(b));
+  }
+
+  const std::size_t body_size =
+      5 * 16 + context.bytes.size() + kfw.bytes.size() + pw.bytes.size() + cw.bytes.size() + lw.bytes.size();
   Writer out;
   out.bytes.reserve(kHeaderSize + body_size);
   out.raw(kMagic, sizeof(kMagic));
@@ -381,6 +397,7 @@ std::vector<std::uint8_t> encode_map(const Map& map, const FrameContext& ctx, st
   section(out, kKeyFramesTag, kfw);
   section(out, kPointsTag, pw);
   section(out, kCovisibilityTag, cw);
+  section(out, kLoopEdgesTag, lw);
   return std::move(out.bytes);
 }
 
@@ -403,13 +420,14 @@ MapFileInfo decode_map(const std::uint8_t* data, std::size_t size, const std::st
   if (order == 0x04030201u) fail("map file was written with the other byte order (big-endian); not supported");
   if (header_crc != map_file_crc32(data, 40)) fail("header checksum mismatch: the file is corrupt");
   if (order != kByteOrderMark || reserved1 != 0 || reserved2 != 0) fail("header fields are invalid: the file is corrupt");
-  if (version != kMapFileVersion)
-    fail(fmt::format("map file version {} is not supported (this build reads version {})", version, kMapFileVersion));
+  if (version < 1 || version > kMapFileVersion)
+    fail(fmt::format("map file version {} is not supported (this build reads versions 1 to {})", version, kMapFileVersion));
   if (vocabulary_checksum && vocabulary != 0 && vocabulary != *vocabulary_checksum)
     fail(fmt::format("map was saved with vocabulary checksum {:016x}, but the vocabulary in use has {:016x}; "
                      "use the map with the vocabulary it was built with",
                      vocabulary, *vocabulary_checksum));
-  if (sections != std::size(kSectionOrder)) fail(fmt::format("header lists {} sections, expected {}", sections, std::size(kSectionOrder)));
+  const std::size_t n_sections = section_count(version);
+  if (sections != n_sections) fail(fmt::format("header lists {} sections, expected {} for version {}", sections, n_sections, version));
   if (body_size > size - kHeaderSize)
     fail(fmt::format("truncated map file: header announces {} bytes of sections, only {} present", body_size, size - kHeaderSize));
   if (body_size < size - kHeaderSize) fail(fmt::format("{} unexpected bytes after the last section", size - kHeaderSize - body_size));
@@ -421,7 +439,8 @@ MapFileInfo decode_map(const std::uint8_t* data, std::size_t size, const std::st
   };
   std::vector<Span> spans;
   std::size_t pos = kHeaderSize;
-  for (std::uint32_t expected : kSectionOrder) {
+  for (std::size_t si = 0; si < n_sections; ++si) {
+    const std::uint32_t expected = kSectionOrder[si];
     if (size - pos < 16) fail(fmt::format("truncated map file: section {} header missing at offset {}", tag_name(expected), pos));
     std::uint32_t t, crc;
     std::uint64_t n;
@@ -590,6 +609,26 @@ MapFileInfo decode_map(const std::uint8_t* data, std::size_t size, const std::st
     }
   }
   vr.expect_end();
+  std::vector<std::pair<KeyFrame*, KeyFrame*>> loop_edges;
+  if (version >= 2) {
+    Reader lr(spans[4].data, spans[4].size, name, "LOOP");
+    const std::size_t n_loops = lr.count(16, "loop edge count");
+    std::set<std::pair<long, long>> seen;
+    for (std::size_t e = 0; e < n_loops; ++e) {
+      const long a = lr.get<std::int64_t>("loop edge keyframe");
+      const long b = lr.get<std::int64_t>("loop edge keyframe");
+      KeyFrame* ka = lookup(kf_by_id, a, lr, "loop edge");
+      KeyFrame* kb = lookup(kf_by_id, b, lr, "loop edge");
+      if (ka == kb) lr.fail(fmt::format("keyframe {} has a loop edge to itself", a));
+      if (!seen.insert({std::min(a, b), std::max(a, b)}).second) lr.fail(fmt::format("loop edge {}-{} appears twice", a, b));
+      loop_edges.emplace_back(ka, kb);
+    }
+    lr.expect_end();
+  }
+  for (const auto& [a, b] : loop_edges) {
+    a->loop_edges.insert(b);
+    b->loop_edges.insert(a);
+  }
   for (auto& kf : kfs) {
     // Rebuild the weight order through the one place that defines it.
     auto edges = kf->connections;

@@ -13,8 +13,10 @@
 //           | u64 bytes after the header | u32 CRC-32 of the preceding 40 bytes | u32 reserved
 //   section u32 tag | u32 CRC-32 of the payload | u64 payload size | payload
 // Sections, in this order: "CTXT" (camera, pyramid, descriptor kind, id counters),
-// "KFRM" (keyframes), "MPTS" (map points), "COVI" (covisibility edges). Records are sorted by
-// id and maps by key, so save -> load -> save gives identical bytes.
+// "KFRM" (keyframes), "MPTS" (map points), "COVI" (covisibility edges), "LOOP" (loop edges:
+// u32 count, then pairs of i64 keyframe ids, smaller id first; since version 2). Records are
+// sorted by id and maps by key, so save -> load -> save gives identical bytes. Version 1
+// files (without LOOP) are read as maps without loop edges; newer versions are rejected.
 //
 // Reading validates before it builds: checksums, sizes, every id reference and index; any
 // problem is an InputError "FILE: what is wrong" and the target map is left untouched.
@@ -31,7 +33,7 @@ namespace builtscene::slam {
 
 class Map;
 
-inline constexpr std::uint32_t kMapFileVersion = 1;
+inline constexpr std::uint32_t kMapFileVersion = 2;
 
 struct MapFileInfo {
   std::uint32_t version = 0;

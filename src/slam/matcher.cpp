@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <unordered_set>
 
 #include "slam/key_frame.hpp"
 #include "slam/map.hpp"
@@ -225,6 +226,40 @@ int fuse(KeyFrame& kf, const std::vector<std::shared_ptr<MapPoint>>& points, Map
     ++fused;
   }
   return fused;
+}
+
+int search_keyframe_neighbourhood(Frame& frame, const KeyFrame& candidate, std::size_t neighbours, float th) {
+  const auto& ctx = *frame.f->ctx;
+  const Intrinsics K = intrinsics_of(ctx);
+  const Eigen::Vector3d O = frame.camera_center();
+  std::vector<KeyFrame*> kfs = candidate.best_covisibles(neighbours);
+  kfs.push_back(const_cast<KeyFrame*>(&candidate));
+  std::vector<const MapPoint*> already;
+  for (const auto& p : frame.points)
+    if (p) already.push_back(p.get());
+  std::sort(already.begin(), already.end());
+  std::vector<ProjectedPoint> candidates;
+  std::unordered_set<const MapPoint*> seen;
+  for (KeyFrame* kf : kfs) {
+    if (kf->bad) continue;
+    for (const auto& p : kf->points) {
+      if (!p || p->bad || std::binary_search(already.begin(), already.end(), p.get())) continue;
+      if (!seen.insert(p.get()).second) continue;
+      const Eigen::Vector3d pc = frame.T_cw * p->position;
+      if (pc.z() <= 0) continue;
+      const double inv_z = 1.0 / pc.z();
+      const double u = K.fx * pc.x() * inv_z + K.cx, v = K.fy * pc.y() * inv_z + K.cy;
+      if (!ctx.in_image(u, v)) continue;
+      const Eigen::Vector3d po = p->position - O;
+      const double dist = po.norm();
+      if (dist < 0.8 * p->min_distance || dist > 1.2 * p->max_distance) continue;
+      const double view_cos = po.dot(p->normal) / dist;
+      if (view_cos < 0.5) continue;
+      candidates.push_back({p, static_cast<float>(u), static_cast<float>(v), static_cast<float>(u - K.bf * inv_z),
+                            p->predict_level(dist, ctx.pyramid), static_cast<float>(view_cos)});
+    }
+  }
+  return search_local_points(frame, candidates, th);
 }
 
 }  // namespace builtscene::slam

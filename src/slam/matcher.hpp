@@ -46,6 +46,12 @@ struct ProjectedPoint {
 // th * (2.5 when seen head-on, else 4) * scale(level). Returns the number of new matches.
 int search_local_points(Frame& frame, const std::vector<ProjectedPoint>& candidates, float th);
 
+// Projects the map points of `keyframe` and its `neighbours` best covisible keyframes (those
+// not matched in the frame yet, in front, inside the scale range and the viewing cone) into
+// the frame at its current pose and matches them (search_local_points). Relocalization and
+// loop closing use it to extend matches found by bag of words. Returns new matches.
+int search_keyframe_neighbourhood(Frame& frame, const KeyFrame& keyframe, std::size_t neighbours, float th);
+
 // Matches the keyframe's map points to the frame's keypoints by descriptor alone
 // (best < strict threshold, Lowe ratio 0.7, rotation consistency). Returns the match count.
 int search_by_descriptor(const KeyFrame& kf, Frame& frame);

@@ -1,7 +1,6 @@
 #include "slam/relocalizer.hpp"
 
 #include <algorithm>
-#include <unordered_set>
 
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core/eigen.hpp>
@@ -39,37 +38,7 @@ Relocalizer::Relocalizer(const KeyFrameDatabase& database, RelocalizerOptions op
     : db_(database), opt_(options) {}
 
 int Relocalizer::search_local_map(Frame& frame, const KeyFrame& candidate, float th) const {
-  const auto& ctx = *frame.f->ctx;
-  const Intrinsics K = intrinsics_of(ctx);
-  const Eigen::Vector3d O = frame.camera_center();
-  std::vector<KeyFrame*> kfs = candidate.best_covisibles(10);
-  kfs.push_back(const_cast<KeyFrame*>(&candidate));
-  std::vector<const MapPoint*> already;
-  for (const auto& p : frame.points)
-    if (p) already.push_back(p.get());
-  std::sort(already.begin(), already.end());
-  std::vector<ProjectedPoint> candidates;
-  std::unordered_set<const MapPoint*> seen;
-  for (KeyFrame* kf : kfs) {
-    if (kf->bad) continue;
-    for (const auto& p : kf->points) {
-      if (!p || p->bad || std::binary_search(already.begin(), already.end(), p.get())) continue;
-      if (!seen.insert(p.get()).second) continue;
-      const Eigen::Vector3d pc = frame.T_cw * p->position;
-      if (pc.z() <= 0) continue;
-      const double inv_z = 1.0 / pc.z();
-      const double u = K.fx * pc.x() * inv_z + K.cx, v = K.fy * pc.y() * inv_z + K.cy;
-      if (!ctx.in_image(u, v)) continue;
-      const Eigen::Vector3d po = p->position - O;
-      const double dist = po.norm();
-      if (dist < 0.8 * p->min_distance || dist > 1.2 * p->max_distance) continue;
-      const double view_cos = po.dot(p->normal) / dist;
-      if (view_cos < 0.5) continue;
-      candidates.push_back({p, static_cast<float>(u), static_cast<float>(v), static_cast<float>(u - K.bf * inv_z),
-                            p->predict_level(dist, ctx.pyramid), static_cast<float>(view_cos)});
-    }
-  }
-  return search_local_points(frame, candidates, th);
+  return search_keyframe_neighbourhood(frame, candidate, 10, th);
 }
 
 std::shared_ptr<KeyFrame> Relocalizer::relocalize(Frame& frame) const {

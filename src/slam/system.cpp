@@ -39,12 +39,23 @@ System::System(const RgbdCameraSettings& settings, SystemOptions options)
       relocalizer_ = std::make_unique<Relocalizer>(*database_);
       tracker_->set_relocalizer(relocalizer_.get());
     }
+    if (options_.loop_closing) {
+      loop_closer_ = std::make_unique<LoopCloser>(map_, *database_, mapping_.get(), options_.loop, options_.mapping_thread,
+                                                  &timer_);
+      loop_closer_->set_event_sink([this](const LoopEvent& e) { on_loop_event(e); });
+      mapping_->set_keyframe_output([this](std::shared_ptr<KeyFrame> kf) { loop_closer_->insert_keyframe(std::move(kf)); });
+    }
   }
-  if (options_.mapping_thread) mapping_->start();
+  if (options_.loop_closing && !loop_closer_) spdlog::warn("no vocabulary: loop closing off");
+  if (options_.mapping_thread) {
+    mapping_->start();
+    if (loop_closer_) loop_closer_->start();
+  }
 }
 
 System::~System() {
   shutdown();
+  loop_closer_.reset();
   std::lock_guard lock(map_.mutex());
   if (database_) database_->clear();
   map_.clear();
@@ -75,7 +86,10 @@ TrackingOutcome System::track_rgbd(const cv::Mat& image, const cv::Mat& depth_m,
     if (const auto& kf = tracker_->records().back().reference) database_->add(kf);
     timer_.add("keyframe_bow", ms_since(t_bow));
   }
-  if (!options_.mapping_thread) mapping_->run_pending();
+  if (!options_.mapping_thread) {
+    mapping_->run_pending();
+    if (loop_closer_) loop_closer_->run_pending();
+  }
   // Frame records must not keep culled keyframes (and their features) alive.
   const long culled = mapping_->stats().keyframes_culled;
   if (culled != culled_seen_) {
@@ -96,7 +110,31 @@ void System::shutdown() {
   shut_down_ = true;
   mapping_->run_pending();
   mapping_->finish();
+  // After local mapping: its last keyframes still go through loop detection.
+  if (loop_closer_) loop_closer_->finish();
 }
+
+void System::on_loop_event(const LoopEvent& event) {
+  std::vector<LoopEventSubscriber> subscribers;
+  {
+    std::lock_guard lock(events_mutex_);
+    events_.push_back(event);
+    subscribers = subscribers_;
+  }
+  for (const auto& s : subscribers) s(event);
+}
+
+void System::subscribe_loop_events(LoopEventSubscriber subscriber) {
+  std::lock_guard lock(events_mutex_);
+  subscribers_.push_back(std::move(subscriber));
+}
+
+std::vector<LoopEvent> System::loop_events() const {
+  std::lock_guard lock(events_mutex_);
+  return events_;
+}
+
+LoopCloser::Stats System::loop_closing_stats() const { return loop_closer_ ? loop_closer_->stats() : LoopCloser::Stats{}; }
 
 SE3 System::record_pose(const Tracker::FrameRecord& r) const {
   // Walk up the spanning tree past culled keyframes (their pose relative to the parent was

@@ -1,7 +1,7 @@
 #pragma once
 // The SLAM facade: give it RGB-D frames, get poses, trajectories and statistics. It owns the
-// map, the tracker (run in the caller's thread) and the local-mapping thread; a loop-closing
-// thread (issue 5) will be owned here too.
+// map, the tracker (run in the caller's thread), the local-mapping thread and the
+// loop-closing thread (with its global-BA thread), see loop_closer.hpp.
 //
 //   System slam(settings);
 //   slam.load_map("old.map");              // optional: extend or localize in a saved map
@@ -17,7 +17,9 @@
 // keyframes, finishes its queue and idles. After a map is loaded, or whenever tracking is
 // lost, each frame is relocalized (bag-of-words relocalizer when a vocabulary is loaded).
 #include <filesystem>
+#include <functional>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <vector>
 
@@ -28,6 +30,8 @@
 #include "features/orb_extractor.hpp"
 #include "io/trajectory.hpp"
 #include "slam/local_mapping.hpp"
+#include "slam/loop_closer.hpp"
+#include "slam/loop_event.hpp"
 #include "slam/map.hpp"
 #include "slam/map_serializer.hpp"
 #include "slam/mode_plan.hpp"
@@ -49,6 +53,10 @@ struct SystemOptions {
   // is only matched against the last reference keyframe.
   std::filesystem::path vocabulary;
   bool relocalization = true;
+  // Loop closing (needs the vocabulary). With mapping_thread == false it runs inline after
+  // local mapping, global BA included (deterministic).
+  bool loop_closing = true;
+  LoopClosingOptions loop;
 };
 
 // A fingerprint of a vocabulary, stored in saved maps (never 0).
@@ -120,6 +128,18 @@ class System {
   // Frames whose pose came from RGB-D odometry because features could not hold it.
   long depth_odometry_frames() const { return tracker_->depth_odometry_frames(); }
 
+  // Loop closures. A subscriber is called for every LoopEvent (a loop corrected, then its
+  // global BA merged) in the loop-closing or global-BA thread (the caller's thread in inline
+  // mode), without the map lock: it may call this System's const queries, and should hand
+  // heavy work to its own thread (slam_ogm_output.cpp queues the event for the tracking
+  // thread). Subscribe before the first frame.
+  using LoopEventSubscriber = std::function<void(const LoopEvent&)>;
+  void subscribe_loop_events(LoopEventSubscriber subscriber);
+  // Every event so far, in order.
+  std::vector<LoopEvent> loop_events() const;
+  LoopCloser::Stats loop_closing_stats() const;
+  bool loop_closing_enabled() const { return loop_closer_ != nullptr; }
+
  private:
   RgbdCameraSettings settings_;
   SystemOptions options_;
@@ -132,6 +152,11 @@ class System {
   std::shared_ptr<const BowVocabulary> vocabulary_;
   std::unique_ptr<KeyFrameDatabase> database_;
   std::unique_ptr<Relocalizer> relocalizer_;
+  std::unique_ptr<LoopCloser> loop_closer_;
+  mutable std::mutex events_mutex_;  // guards events_ and subscribers_
+  std::vector<LoopEvent> events_;
+  std::vector<LoopEventSubscriber> subscribers_;
+  void on_loop_event(const LoopEvent& event);
   long next_frame_id_ = 0;
   bool shut_down_ = false;
   Mode mode_ = Mode::kSlam;

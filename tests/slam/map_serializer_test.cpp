@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <fstream>
 #include <random>
+#include <set>
 
 #include <unistd.h>
 
@@ -166,11 +167,15 @@ TEST(MapSerializer, EveryFlippedByteIsDetected) {
 TEST(MapSerializer, WrongVersionForeignFilesAndOtherByteOrder) {
   Built a(3, 30);
   Map target;
-  auto v2 = a.bytes;
-  set_u32(v2, 8, 2);
-  fix_header_crc(v2);
-  EXPECT_NE(decode_error(v2, a.ctx, target).find("version 2 is not supported"), std::string::npos)
-      << decode_error(v2, a.ctx, target);
+  auto v3 = a.bytes;
+  set_u32(v3, 8, 3);
+  fix_header_crc(v3);
+  EXPECT_NE(decode_error(v3, a.ctx, target).find("version 3 is not supported"), std::string::npos)
+      << decode_error(v3, a.ctx, target);
+  auto v0 = a.bytes;
+  set_u32(v0, 8, 0);
+  fix_header_crc(v0);
+  EXPECT_NE(decode_error(v0, a.ctx, target).find("version 0 is not supported"), std::string::npos);
 
   auto be = a.bytes;
   set_u32(be, 12, 0x04030201u);
@@ -234,6 +239,91 @@ TEST(MapSerializer, DanglingReferencesAreRejectedEvenWithValidChecksums) {
   set_u32(b, sections[2].first - 12, map_file_crc32(b.data() + sections[2].first, sections[2].second));
   const std::string err = decode_error(b, a.ctx, target);
   EXPECT_NE(err.find("unknown id 999"), std::string::npos) << err;
+}
+
+// Loop edges (version 2): saved once per pair, restored on both ends.
+TEST(MapSerializer, LoopEdgesRoundTrip) {
+  Built a(8, 60);
+  {
+    std::lock_guard lock(a.map.mutex());
+    const auto kfs = a.map.keyframes();
+    for (auto [i, j] : {std::pair{0, 5}, std::pair{2, 7}}) {
+      kfs[static_cast<std::size_t>(i)]->loop_edges.insert(kfs[static_cast<std::size_t>(j)].get());
+      kfs[static_cast<std::size_t>(j)]->loop_edges.insert(kfs[static_cast<std::size_t>(i)].get());
+    }
+    a.bytes = encode_map(a.map, *a.ctx, 0);
+  }
+  Map loaded;
+  std::lock_guard lb(loaded.mutex());
+  decode_map(a.bytes.data(), a.bytes.size(), "mem", loaded, a.ctx);
+  const auto kfs = loaded.keyframes();
+  ASSERT_EQ(kfs.size(), 8u);
+  std::set<std::pair<long, long>> edges;
+  for (const auto& kf : kfs)
+    for (const KeyFrame* o : kf->loop_edges) edges.insert({kf->id, o->id});
+  EXPECT_EQ(edges, (std::set<std::pair<long, long>>{{0, 5}, {5, 0}, {2, 7}, {7, 2}}));
+  EXPECT_EQ(encode_map(loaded, *a.ctx, 0), a.bytes);
+}
+
+// A version-1 file (no LOOP section) is the same map without loop edges.
+TEST(MapSerializer, VersionOneFilesStillLoad) {
+  Built a(6, 50);
+  // The version-2 bytes of a map without loop edges end with an empty LOOP section: 16 bytes
+  // of section header and a zero count. Without them, and with the old header, they are
+  // what version 1 wrote.
+  auto v1 = a.bytes;
+  ASSERT_GT(v1.size(), 48u + 20u);
+  std::uint32_t tag;
+  std::memcpy(&tag, v1.data() + v1.size() - 20, 4);
+  ASSERT_EQ(std::string(reinterpret_cast<const char*>(&tag), 4), "LOOP");
+  v1.resize(v1.size() - 20);
+  set_u32(v1, 8, 1);
+  set_u32(v1, 24, 4);
+  const std::uint64_t body = v1.size() - 48;
+  std::memcpy(v1.data() + 32, &body, 8);
+  fix_header_crc(v1);
+  Map loaded;
+  ASSERT_EQ(decode_error(v1, a.ctx, loaded), "");
+  std::lock_guard lb(loaded.mutex());
+  EXPECT_EQ(loaded.keyframe_count(), 6u);
+  EXPECT_EQ(encode_map(loaded, *a.ctx, 0), a.bytes);  // saved again as version 2
+  // A version-2 header over version-1 sections is not accepted.
+  auto mixed = v1;
+  set_u32(mixed, 8, 2);
+  fix_header_crc(mixed);
+  Map target;
+  EXPECT_NE(decode_error(mixed, a.ctx, target), "");
+}
+
+TEST(MapSerializer, BadLoopEdgesAreRejected) {
+  Built a(6, 50);
+  auto with_loop = [&](std::int64_t x, std::int64_t y, int copies) {
+    auto b = a.bytes;
+    b.resize(b.size() - 4);  // drop the zero count
+    const std::uint32_t n = static_cast<std::uint32_t>(copies);
+    std::vector<std::uint8_t> payload(4);
+    std::memcpy(payload.data(), &n, 4);
+    for (int c = 0; c < copies; ++c) {
+      const std::size_t at = payload.size();
+      payload.resize(at + 16);
+      std::memcpy(payload.data() + at, &x, 8);
+      std::memcpy(payload.data() + at + 8, &y, 8);
+    }
+    b.insert(b.end(), payload.begin(), payload.end());
+    const std::size_t section = b.size() - payload.size() - 16;
+    set_u32(b, section + 4, map_file_crc32(payload.data(), payload.size()));
+    const std::uint64_t size = payload.size();
+    std::memcpy(b.data() + section + 8, &size, 8);
+    const std::uint64_t body = b.size() - 48;
+    std::memcpy(b.data() + 32, &body, 8);
+    fix_header_crc(b);
+    return b;
+  };
+  Map target;
+  EXPECT_EQ(decode_error(with_loop(1, 4, 1), a.ctx, target), "");
+  EXPECT_NE(decode_error(with_loop(3, 3, 1), a.ctx, target).find("loop edge to itself"), std::string::npos);
+  EXPECT_NE(decode_error(with_loop(1, 4, 2), a.ctx, target).find("appears twice"), std::string::npos);
+  EXPECT_NE(decode_error(with_loop(1, 99, 1), a.ctx, target), "");
 }
 
 }  // namespace

@@ -1,0 +1,503 @@
+#include "slam/loop_closer.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <set>
+#include <unordered_map>
+#include <unordered_set>
+
+#include "core/logging.hpp"
+#include "features/bow_vector.hpp"
+#include "slam/bow_matcher.hpp"
+#include "slam/key_frame.hpp"
+#include "slam/keyframe_database.hpp"
+#include "slam/local_bundle_adjuster.hpp"
+#include "slam/local_mapping.hpp"
+#include "slam/loop_fusion.hpp"
+#include "slam/map.hpp"
+#include "slam/map_point.hpp"
+#include "slam/matcher.hpp"
+#include "slam/pose_graph_optimizer.hpp"
+#include "slam/pose_optimizer.hpp"
+#include "slam/rigid_transform_ransac.hpp"
+
+namespace builtscene::slam {
+
+struct LoopCloser::LoopMatch {
+  std::shared_ptr<KeyFrame> candidate;
+  SE3 T_cw;  // the current keyframe's pose that agrees with the candidate's map
+  std::vector<std::shared_ptr<MapPoint>> points;  // per keypoint of the current keyframe: loop-side point
+  int inliers = 0;
+};
+
+namespace {
+
+int keep_inliers(Frame& frame) {
+  int n = 0;
+  for (std::size_t i = 0; i < frame.points.size(); ++i) {
+    if (!frame.points[i]) continue;
+    if (frame.outlier[i]) {
+      frame.points[i] = nullptr;
+      frame.outlier[i] = 0;
+    } else {
+      ++n;
+    }
+  }
+  return n;
+}
+
+std::vector<LoopEvent::KeyFramePose> keyframe_poses(const Map& map) {
+  std::vector<LoopEvent::KeyFramePose> out;
+  for (const auto& k : map.keyframes())
+    if (!k->bad) out.push_back({k->id, k->timestamp, k->pose_inverse()});
+  return out;
+}
+
+}  // namespace
+
+LoopCloser::LoopCloser(Map& map, const KeyFrameDatabase& database, LocalMapping* mapping, LoopClosingOptions options,
+                       bool threaded, StageTimer* timer)
+    : map_(map), db_(database), mapping_(mapping), opt_(options), threaded_(threaded), timer_(timer),
+      consistency_(options.consistency) {}
+
+LoopCloser::~LoopCloser() { finish(); }
+
+void LoopCloser::add_time(const char* stage, std::chrono::steady_clock::time_point start) const {
+  if (timer_) timer_->add(stage, ms_since(start));
+}
+
+void LoopCloser::emit(const LoopEvent& e) const {
+  if (sink_) sink_(e);
+}
+
+LoopCloser::Stats LoopCloser::stats() const {
+  std::lock_guard lock(stats_mutex_);
+  return stats_;
+}
+
+void LoopCloser::start() {
+  if (thread_.joinable()) return;
+  {
+    std::lock_guard lock(queue_mutex_);
+    stop_ = false;
+  }
+  thread_ = std::thread([this] { run(); });
+}
+
+void LoopCloser::insert_keyframe(std::shared_ptr<KeyFrame> kf) {
+  {
+    std::lock_guard lock(queue_mutex_);
+    queue_.push_back(std::move(kf));
+  }
+  queue_cv_.notify_one();
+}
+
+void LoopCloser::run_pending() {
+  if (thread_.joinable()) return;
+  for (;;) {
+    std::shared_ptr<KeyFrame> kf;
+    {
+      std::lock_guard lock(queue_mutex_);
+      if (queue_.empty()) break;
+      kf = queue_.front();
+      queue_.pop_front();
+    }
+    process(kf);
+  }
+}
+
+void LoopCloser::finish() {
+  {
+    std::lock_guard lock(queue_mutex_);
+    stop_ = true;
+  }
+  queue_cv_.notify_all();
+  if (thread_.joinable()) thread_.join();
+  run_pending();
+  // The global BA of the last loop is worth waiting for: it is the best map there will be.
+  if (gba_thread_.joinable()) gba_thread_.join();
+}
+
+void LoopCloser::run() {
+  for (;;) {
+    std::shared_ptr<KeyFrame> kf;
+    {
+      std::unique_lock lock(queue_mutex_);
+      queue_cv_.wait(lock, [this] { return stop_ || !queue_.empty(); });
+      if (queue_.empty()) return;
+      kf = queue_.front();
+      queue_.pop_front();
+    }
+    process(kf);
+  }
+}
+
+void LoopCloser::process(const std::shared_ptr<KeyFrame>& kf) {
+  const auto start = std::chrono::steady_clock::now();
+  std::unique_ptr<LoopMatch> match;
+  {
+    std::lock_guard lock(map_.mutex());
+    match = detect(*kf);
+  }
+  add_time("loop_detection", start);
+  if (match) correct(kf, *match);
+}
+
+std::unique_ptr<LoopCloser::LoopMatch> LoopCloser::detect(KeyFrame& kf) {
+  if (kf.bad || kf.bow.empty()) return nullptr;
+  {
+    std::lock_guard s(stats_mutex_);
+    ++stats_.keyframes_checked;
+  }
+  if (static_cast<int>(map_.keyframe_count()) < opt_.min_keyframes || kf.id < last_loop_kf_id_ + opt_.min_keyframes)
+    return nullptr;
+  // The place must look more like the candidate than the keyframe's least similar
+  // covisible neighbour does (ORB-SLAM2's relative minimum score).
+  double min_score = 1.0;
+  for (const KeyFrame* n : kf.ordered_connections)
+    if (!n->bad && !n->bow.empty()) min_score = std::min(min_score, bow_l1_score(kf.bow, n->bow));
+  std::vector<LoopConsistency::Candidate> candidates;
+  std::unordered_map<long, KeyFrame*> by_id;
+  for (KeyFrame* c : db_.loop_candidates(kf, min_score)) {
+    if (c->bad || c->id > kf.id - opt_.min_keyframe_gap) continue;
+    LoopConsistency::Candidate cand{c->id, {}};
+    for (const auto& [n, w] : c->connections) cand.group.push_back(n->id);
+    candidates.push_back(std::move(cand));
+    by_id[c->id] = c;
+  }
+  const auto accepted = consistency_.update(candidates);
+  for (long id : accepted) {
+    {
+      std::lock_guard s(stats_mutex_);
+      ++stats_.consistent_candidates;
+    }
+    if (auto m = verify(kf, *by_id.at(id))) return m;
+    std::lock_guard s(stats_mutex_);
+    ++stats_.rejected;
+  }
+  return nullptr;
+}
+
+std::unique_ptr<LoopCloser::LoopMatch> LoopCloser::verify(KeyFrame& kf, KeyFrame& cand) {
+  if (cand.bow_features.empty() || kf.bow_features.empty()) return nullptr;
+  int n = 0;
+  const auto matches = search_by_bow(cand, *kf.f, kf.bow_features, &n);
+  if (n < opt_.min_bow_matches) return nullptr;
+  // 3D-3D pairs in the two cameras' frames: the candidate's points, and for the current
+  // keyframe its own map point at the keypoint (or the keypoint's depth).
+  const SE3 T1 = kf.pose(), T2 = cand.pose();
+  std::vector<Eigen::Vector3d> src, dst;
+  std::vector<std::size_t> keypoint;
+  for (std::size_t j = 0; j < matches.size(); ++j) {
+    if (!matches[j] || matches[j]->bad) continue;
+    Eigen::Vector3d p1;
+    const auto& own = kf.points[j];
+    if (own && !own->bad) p1 = T1 * own->position;
+    else if (kf.f->has_depth(j)) p1 = kf.f->unproject(j);
+    else continue;
+    src.push_back(T2 * matches[j]->position);
+    dst.push_back(p1);
+    keypoint.push_back(j);
+  }
+  if (static_cast<int>(src.size()) < opt_.ransac_min_inliers) return nullptr;
+  const auto fit = ransac_rigid_transform(src, dst, opt_.ransac_inlier_m, opt_.ransac_min_inliers, opt_.ransac_iterations,
+                                          static_cast<std::uint32_t>(kf.id));
+  if (!fit) return nullptr;
+  const SE3 T12(Eigen::Matrix3d(fit->transform.linear()), Eigen::Vector3d(fit->transform.translation()));
+  // The keyframe relocalized against the candidate's map: reprojection errors decide.
+  Frame frame(kf.frame_id, kf.timestamp, kf.f);
+  frame.set_pose(T12 * T2);
+  for (std::size_t k = 0; k < keypoint.size(); ++k)
+    if (fit->inliers[k]) frame.points[keypoint[k]] = matches[keypoint[k]];
+  optimize_frame_pose(frame);
+  int good = keep_inliers(frame);
+  if (good < opt_.min_refined_inliers) return nullptr;
+  search_keyframe_neighbourhood(frame, cand, cand.ordered_connections.size(), opt_.guided_search_radius);
+  optimize_frame_pose(frame);
+  good = keep_inliers(frame);
+  if (good < opt_.min_inliers) return nullptr;
+  bool anchored = false;
+  for (const auto& [n, w] : kf.connections) anchored |= !n->bad && n->id < kf.id - opt_.min_keyframe_gap;
+  if (anchored) {
+    const SE3 correction = frame.T_cw.inverse() * T1;
+    const double angle_deg = Eigen::AngleAxisd(correction.rotation()).angle() * 180.0 / M_PI;
+    const double moved = (frame.camera_center() - kf.camera_center()).norm();
+    if (moved > opt_.max_anchored_correction_m || angle_deg > opt_.max_anchored_correction_deg) {
+      spdlog::info("loop candidate {} for keyframe {} (frame {}) rejected: {} inliers, but it would move a keyframe "
+                   "tied to older ones by {:.2f} m / {:.1f} deg",
+                   cand.id, kf.id, kf.frame_id, good, moved, angle_deg);
+      std::lock_guard s(stats_mutex_);
+      ++stats_.rejected_anchored;
+      return nullptr;
+    }
+  }
+  auto m = std::make_unique<LoopMatch>();
+  m->candidate = cand.shared_from_this();
+  m->T_cw = frame.T_cw;
+  m->points = frame.points;
+  m->inliers = good;
+  return m;
+}
+
+void LoopCloser::stop_global_ba() {
+  abort_gba_ = true;
+  if (gba_thread_.joinable()) gba_thread_.join();
+  abort_gba_ = false;
+}
+
+void LoopCloser::correct(const std::shared_ptr<KeyFrame>& kf, const LoopMatch& m) {
+  const auto start = std::chrono::steady_clock::now();
+  stop_global_ba();
+  if (mapping_) {
+    mapping_->request_pause();
+    mapping_->wait_until_paused();
+  }
+  LoopEvent event;
+  bool closed = false;
+  int fused = 0;
+  {
+    std::lock_guard lock(map_.mutex());
+    KeyFrame* cand = m.candidate.get();
+    if (!kf->bad && !cand->bad) {
+      closed = true;
+      kf->update_connections();
+      const auto all = map_.keyframes();
+      std::unordered_map<const KeyFrame*, SE3> before;  // T_cw before the correction
+      for (const auto& k : all) before[k.get()] = k->pose();
+
+      // The keyframe, its covisible keyframes, and keyframes tracking made after it that
+      // local mapping has not linked into the graph yet (they sit right behind it).
+      std::vector<KeyFrame*> connected{kf.get()};
+      for (KeyFrame* n : kf->ordered_connections)
+        if (!n->bad) connected.push_back(n);
+      for (const auto& k : all)
+        if (!k->has_parent_link && k->id > kf->id &&
+            std::find(connected.begin(), connected.end(), k.get()) == connected.end())
+          connected.push_back(k.get());
+      const std::unordered_set<const KeyFrame*> connected_set(connected.begin(), connected.end());
+      const SE3 T_wc_old = kf->pose_inverse();
+      std::unordered_map<MapPoint*, KeyFrame*> corrector;
+      for (KeyFrame* c : connected) {
+        const SE3 T_new = c == kf.get() ? m.T_cw : before[c] * T_wc_old * m.T_cw;
+        const SE3 move = T_new.inverse() * before[c];  // old world -> corrected world, seen from c
+        for (const auto& p : c->points)
+          if (p && !p->bad && corrector.emplace(p.get(), c).second) p->position = move * p->position;
+        c->set_pose(T_new);
+      }
+      for (const auto& [p, c] : corrector) p->update_normal_and_depth();
+
+      std::unordered_map<const KeyFrame*, std::set<const KeyFrame*>> previous;
+      for (KeyFrame* c : connected)
+        for (const auto& [n, w] : c->connections) previous[c].insert(n);
+      fused += fuse_loop_matches(*kf, m.points, map_);
+      const auto loop_points = neighbourhood_points(*cand);
+      for (KeyFrame* c : connected) fused += fuse(*c, loop_points, map_, opt_.fuse_radius);
+
+      // Links the fusion created between the two sides: the loop connections.
+      struct Link {
+        KeyFrame *a, *b;
+        int weight;
+      };
+      std::vector<Link> loop_links;
+      for (KeyFrame* c : connected) {
+        if (c->bad) continue;
+        c->update_connections();
+        for (const auto& [n, w] : c->connections)
+          if (!previous[c].count(n) && !connected_set.count(n)) loop_links.push_back({c, n, w});
+      }
+      kf->loop_edges.insert(cand);
+      cand->loop_edges.insert(kf.get());
+      kf->keep = cand->keep = true;
+
+      // Essential graph. Odometry-like edges (tree, strong covisibility, earlier loops) keep
+      // the relative poses from before the correction; the new loop's edges take the
+      // corrected ones: the optimization spreads the loop's error along the graph.
+      const auto live = map_.keyframes();
+      PoseGraph graph;
+      std::unordered_map<const KeyFrame*, int> node;
+      for (const auto& k : live) {
+        if (k->bad) continue;
+        node[k.get()] = static_cast<int>(graph.nodes.size());
+        graph.nodes.push_back({k->pose(), k.get() == cand});
+      }
+      std::set<std::pair<long, long>> done;
+      auto add_edge = [&](const KeyFrame* a, const KeyFrame* b, const SE3& Ta, const SE3& Tb) {
+        if (!node.count(a) || !node.count(b) || a == b) return;
+        if (!done.insert({std::min(a->id, b->id), std::max(a->id, b->id)}).second) return;
+        graph.edges.push_back({node[a], node[b], Ta * Tb.inverse(), 1.0});
+      };
+      auto old_pose = [&](const KeyFrame* k) {
+        const auto it = before.find(k);
+        return it == before.end() ? k->pose() : it->second;
+      };
+      add_edge(kf.get(), cand, kf->pose(), cand->pose());
+      for (const Link& l : loop_links)
+        if (l.weight >= opt_.strong_covisibility) add_edge(l.a, l.b, l.a->pose(), l.b->pose());
+      for (const auto& k : live) {
+        if (k->bad) continue;
+        if (k->parent && !k->parent->bad) add_edge(k.get(), k->parent.get(), old_pose(k.get()), old_pose(k->parent.get()));
+        for (const KeyFrame* l : k->loop_edges) add_edge(k.get(), l, old_pose(k.get()), old_pose(l));
+        for (const auto& [n, w] : k->connections)
+          if (w >= opt_.strong_covisibility) add_edge(k.get(), n, old_pose(k.get()), old_pose(n));
+      }
+      const auto t_pg = std::chrono::steady_clock::now();
+      const auto result = optimize_pose_graph(graph, {opt_.pose_graph_iterations});
+      add_time("pose_graph", t_pg);
+      if (result.solved) {
+        std::unordered_map<const KeyFrame*, SE3> pre;  // after the first correction, before the graph
+        for (const auto& k : live) {
+          if (k->bad || !node.count(k.get())) continue;
+          pre[k.get()] = k->pose();
+          k->set_pose(result.poses[static_cast<std::size_t>(node[k.get()])]);
+        }
+        for (const auto& p : map_.points()) {
+          if (p->bad) continue;
+          const auto it = corrector.find(p.get());
+          const KeyFrame* r = it != corrector.end() ? it->second : p->reference;
+          if (!r || r->bad || !pre.count(r)) continue;
+          p->position = r->pose_inverse() * (pre[r] * p->position);
+          p->update_normal_and_depth();
+        }
+      }
+      ++loops_;
+      last_loop_kf_id_ = kf->id;
+      consistency_.reset();
+      event.stage = LoopEvent::Stage::kPoseGraph;
+      event.loop = loops_;
+      event.frame = kf->frame_id;
+      event.timestamp = kf->timestamp;
+      event.keyframe = kf->id;
+      event.matched_keyframe = cand->id;
+      event.inliers = m.inliers;
+      event.correction = m.T_cw.inverse() * before[kf.get()];
+      event.keyframes = keyframe_poses(map_);
+      spdlog::info("loop closed: keyframe {} (frame {}) with keyframe {}, {} inliers, correction {:.3f} m, {} fused, "
+                   "{} graph edges",
+                   kf->id, kf->frame_id, cand->id, m.inliers, event.correction.translation().norm(), fused,
+                   graph.edges.size());
+    }
+  }
+  if (mapping_) mapping_->resume();
+  add_time("loop_correction", start);
+  {
+    std::lock_guard s(stats_mutex_);
+    if (closed) ++stats_.loops;
+    stats_.points_fused += fused;
+  }
+  if (!closed) return;
+  emit(event);
+  if (!opt_.global_bundle_adjustment) return;
+  const long loop = event.loop, keyframe = event.keyframe, matched = event.matched_keyframe;
+  if (threaded_) gba_thread_ = std::thread([this, loop, keyframe, matched] { run_global_ba(loop, keyframe, matched); });
+  else run_global_ba(loop, keyframe, matched);
+}
+
+void LoopCloser::run_global_ba(long loop, long keyframe, long matched) {
+  const auto start = std::chrono::steady_clock::now();
+  BundleAdjustmentProblem pb;
+  std::vector<std::shared_ptr<KeyFrame>> cams;
+  std::vector<std::shared_ptr<MapPoint>> pts;
+  {
+    std::lock_guard lock(map_.mutex());
+    const auto all = map_.keyframes();
+    if (all.empty()) return;
+    pb.K = intrinsics_of(*all.front()->f->ctx);
+    std::unordered_map<const KeyFrame*, int> cam_index;
+    for (const auto& k : all) {
+      // Keyframes local mapping has not linked yet are left to follow their parent later.
+      if (k->bad || (!k->has_parent_link && k != all.front())) continue;
+      cam_index[k.get()] = static_cast<int>(cams.size());
+      cams.push_back(k);
+      pb.cameras.push_back({k->pose(), k == all.front()});  // the oldest keyframe holds the gauge
+    }
+    for (const auto& p : map_.points()) {
+      if (p->bad) continue;
+      int seen = 0;
+      for (const auto& [okf, idx] : p->observations) seen += cam_index.count(okf) > 0;
+      if (seen < 2) continue;
+      const int pi = static_cast<int>(pts.size());
+      pts.push_back(p);
+      pb.points.push_back(p->position);
+      for (const auto& [okf, idx] : p->observations) {
+        const auto it = cam_index.find(okf);
+        if (it == cam_index.end()) continue;
+        const auto is = static_cast<std::size_t>(idx);
+        BundleAdjustmentProblem::Measurement meas;
+        meas.camera = it->second;
+        meas.point = pi;
+        meas.o.uv = {okf->f->keys_un[is].pt.x, okf->f->keys_un[is].pt.y};
+        meas.o.u_right = okf->f->u_right[is];
+        meas.o.inv_sigma2 = okf->f->ctx->pyramid.inv_sigma2[static_cast<std::size_t>(okf->f->keys_un[is].octave)];
+        pb.measurements.push_back(meas);
+      }
+    }
+  }
+  {
+    std::lock_guard s(stats_mutex_);
+    ++stats_.global_ba_runs;
+  }
+  BundleAdjustmentOptions bo;
+  bo.first_iterations = opt_.global_ba_iterations;
+  bo.second_iterations = opt_.global_ba_iterations;
+  const auto r = solve_bundle_adjustment(pb, bo, &abort_gba_);
+  if (r.aborted || !r.solved) {
+    std::lock_guard s(stats_mutex_);
+    ++stats_.global_ba_aborted;
+    return;
+  }
+  if (mapping_) {
+    mapping_->request_pause();
+    mapping_->wait_until_paused();
+  }
+  LoopEvent event;
+  {
+    std::lock_guard lock(map_.mutex());
+    const auto all = map_.keyframes();  // by id: a parent (older) is placed before its children
+    std::unordered_map<const KeyFrame*, SE3> before;
+    for (const auto& k : all) before[k.get()] = k->pose();
+    std::unordered_set<const KeyFrame*> solved;
+    for (std::size_t c = 0; c < cams.size(); ++c) {
+      if (cams[c]->bad) continue;
+      solved.insert(cams[c].get());
+      if (!pb.cameras[c].fixed) cams[c]->set_pose(r.poses[c]);
+    }
+    // Keyframes made since the copy follow their parent: same pose relative to it.
+    for (const auto& k : all) {
+      if (k->bad || solved.count(k.get()) || !k->parent || k->parent->bad || !before.count(k->parent.get())) continue;
+      k->set_pose(before[k.get()] * before[k->parent.get()].inverse() * k->parent->pose());
+    }
+    std::unordered_set<const MapPoint*> moved;
+    for (std::size_t i = 0; i < pts.size(); ++i) {
+      if (pts[i]->bad) continue;
+      pts[i]->position = r.points[i];
+      moved.insert(pts[i].get());
+    }
+    for (const auto& p : map_.points()) {
+      if (p->bad) continue;
+      if (!moved.count(p.get()) && p->reference && before.count(p->reference))
+        p->position = p->reference->pose_inverse() * (before[p->reference] * p->position);
+      p->update_normal_and_depth();
+    }
+    event.stage = LoopEvent::Stage::kGlobalBundleAdjustment;
+    event.loop = loop;
+    event.keyframe = keyframe;
+    event.matched_keyframe = matched;
+    for (const auto& k : all)
+      if (k->id == keyframe) {
+        event.frame = k->frame_id;
+        event.timestamp = k->timestamp;
+      }
+    event.keyframes = keyframe_poses(map_);
+  }
+  if (mapping_) mapping_->resume();
+  {
+    std::lock_guard s(stats_mutex_);
+    ++stats_.global_ba_merged;
+  }
+  add_time("global_ba", start);
+  spdlog::info("global BA after loop {} merged: {} keyframes, {} points, RMS {:.2f} -> {:.2f} px", loop, cams.size(),
+               pts.size(), r.initial_rms_px, r.final_rms_px);
+  emit(event);
+}
+
+}  // namespace builtscene::slam

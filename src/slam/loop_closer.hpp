@@ -1,0 +1,146 @@
+#pragma once
+// The loop-closing thread (ORB-SLAM2's LoopClosing for RGB-D, written here; SE3 instead of
+// Sim3 because depth fixes the scale). For every keyframe local mapping has finished:
+//
+//  1. detection: the KeyFrameDatabase's loop candidates (not covisible with the keyframe,
+//     scoring at least the keyframe's lowest score against its covisible keyframes), kept
+//     only when temporally consistent (loop_consistency.hpp);
+//  2. verification: bag-of-words matches between the candidate's map points and the
+//     keyframe's keypoints, an SE3 by RANSAC on their 3D-3D pairs, motion-only BA of the
+//     keyframe against those points, a guided projection search over the candidate's
+//     covisible keyframes, acceptance by inlier count;
+//  3. correction: local mapping paused; the keyframe and its covisible keyframes moved by the
+//     correction with their points; duplicated points fused with the loop side; the loop edge
+//     added; pose-graph optimization over the essential graph (spanning tree, covisibility
+//     edges with weight >= 100, loop edges); every point moved with the keyframe that
+//     corrected it (or its reference keyframe); local mapping resumed; a LoopEvent;
+//  4. global bundle adjustment in its own thread (aborted by the next loop), merged into the
+//     map with local mapping paused; keyframes and points added since move with their
+//     spanning-tree parent / reference keyframe; a second LoopEvent.
+//
+// Ownership and locks: the LoopCloser owns its keyframe queue (own mutex), its consistency
+// state and the global-BA thread. Map and KeyFrameDatabase state is touched only under
+// Map::mutex(). Detection and verification hold the map lock (like tracking a frame); the
+// correction holds it from the first moved pose to the last moved point, including the
+// pose-graph solve, so tracking never sees a half-corrected map. Global BA solves on a copy
+// without the lock. Lock order: local mapping is paused (LocalMapping::request_pause /
+// wait_until_paused, with no lock held) before the map lock is taken, never the other way.
+#include <atomic>
+#include <condition_variable>
+#include <deque>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <thread>
+
+#include "core/stage_timer.hpp"
+#include "slam/loop_consistency.hpp"
+#include "slam/loop_event.hpp"
+
+namespace builtscene::slam {
+
+class Map;
+class KeyFrame;
+class MapPoint;
+class KeyFrameDatabase;
+class LocalMapping;
+
+struct LoopClosingOptions {
+  int min_keyframes = 10;       // map size before loops are searched, and keyframes between two loops (ORB-SLAM2)
+  int min_keyframe_gap = 20;    // candidates at least this many keyframe ids older (not the recent past)
+  int consistency = 3;          // ORB-SLAM2's covisibility consistency threshold
+  int min_bow_matches = 20;     // per candidate (ORB-SLAM2)
+  double ransac_inlier_m = 0.08;  // 3D-3D residual; Kinect depth noise at 4 m is ~3 cm per point
+  int ransac_min_inliers = 15;
+  int ransac_iterations = 300;
+  int min_refined_inliers = 20;   // after motion-only BA on the RANSAC inliers (ORB-SLAM2: 20)
+  int min_inliers = 40;           // after the guided search (ORB-SLAM2: 40)
+  float guided_search_radius = 4.0f;
+  float fuse_radius = 4.0f;       // ORB-SLAM2 fuses loop points with th = 4
+  // A keyframe that already shares points with keyframes older than min_keyframe_gap sits in
+  // a part of the map an earlier loop (or re-observation) has tied together; a loop that
+  // would move it further than this away from those links contradicts them. Seen on the
+  // generated lab-room: a look-alike place 4.3 m away gave a 5.9 m "correction" with 95
+  // inliers in the second lap (docs/slam.md).
+  double max_anchored_correction_m = 0.5;
+  double max_anchored_correction_deg = 5.0;
+  int strong_covisibility = 100;  // essential-graph covisibility edges
+  int pose_graph_iterations = 20;
+  bool global_bundle_adjustment = true;
+  int global_ba_iterations = 10;  // Ceres iterations (robust phase; as many after outlier classification)
+};
+
+class LoopCloser {
+ public:
+  using EventSink = std::function<void(const LoopEvent&)>;
+
+  // `mapping` (may be null) is paused during corrections; `threaded` runs global BA in its
+  // own thread (else inline, for deterministic runs).
+  LoopCloser(Map& map, const KeyFrameDatabase& database, LocalMapping* mapping, LoopClosingOptions options,
+             bool threaded, StageTimer* timer = nullptr);
+  ~LoopCloser();
+  LoopCloser(const LoopCloser&) = delete;
+  LoopCloser& operator=(const LoopCloser&) = delete;
+
+  // Called in the loop-closing thread (or the global-BA thread, or the caller's thread in
+  // inline mode), without the map lock; keep it short. Set before start().
+  void set_event_sink(EventSink sink) { sink_ = std::move(sink); }
+
+  void start();
+  void insert_keyframe(std::shared_ptr<KeyFrame> kf);
+  // Without start(): processes the queue in the caller's thread (global BA inline too).
+  void run_pending();
+  // Processes what is queued, waits for a running global BA, stops the threads.
+  void finish();
+
+  struct Stats {
+    long keyframes_checked = 0;
+    long consistent_candidates = 0;  // candidates that passed the consistency check
+    long rejected = 0;               // ... and failed geometric verification
+    long rejected_anchored = 0;      // ... of which verified, but contradicting old links
+    long loops = 0;
+    long points_fused = 0;
+    long global_ba_runs = 0, global_ba_aborted = 0, global_ba_merged = 0;
+  };
+  Stats stats() const;
+
+ private:
+  struct LoopMatch;
+
+  Map& map_;
+  const KeyFrameDatabase& db_;
+  LocalMapping* mapping_;
+  LoopClosingOptions opt_;
+  bool threaded_;
+  StageTimer* timer_;
+  EventSink sink_;
+
+  mutable std::mutex queue_mutex_;
+  std::condition_variable queue_cv_;
+  std::deque<std::shared_ptr<KeyFrame>> queue_;
+  bool stop_ = false;
+  std::thread thread_;
+
+  LoopConsistency consistency_;  // loop-closing thread only
+  long last_loop_kf_id_ = -1000000;
+  long loops_ = 0;
+
+  std::thread gba_thread_;
+  std::atomic<bool> abort_gba_{false};
+
+  mutable std::mutex stats_mutex_;
+  Stats stats_;
+
+  void run();
+  void process(const std::shared_ptr<KeyFrame>& kf);
+  // Map lock held.
+  std::unique_ptr<LoopMatch> detect(KeyFrame& kf);
+  std::unique_ptr<LoopMatch> verify(KeyFrame& kf, KeyFrame& candidate);
+  void correct(const std::shared_ptr<KeyFrame>& kf, const LoopMatch& match);
+  void stop_global_ba();
+  void run_global_ba(long loop, long keyframe, long matched);
+  void emit(const LoopEvent& e) const;
+  void add_time(const char* stage, std::chrono::steady_clock::time_point start) const;
+};
+
+}  // namespace builtscene::slam
