@@ -130,6 +130,20 @@ int Frame::matched_count() const {
   return n;
 }
 
+int Frame::keep_inlier_matches() {
+  int n = 0;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    if (!points[i]) continue;
+    if (outlier[i]) {
+      points[i] = nullptr;
+      outlier[i] = 0;
+    } else {
+      ++n;
+    }
+  }
+  return n;
+}
+
 void Frame::clear_matches() {
   std::fill(points.begin(), points.end(), nullptr);
   std::fill(outlier.begin(), outlier.end(), 0);

@@ -91,6 +91,8 @@ class Frame {
   std::size_t size() const { return f->size(); }
   int matched_count() const;
   void clear_matches();
+  // Drops the matches pose optimization marked as outliers; returns the inliers left.
+  int keep_inlier_matches();
 };
 
 }  // namespace builtscene::slam

@@ -32,20 +32,6 @@ struct LoopCloser::LoopMatch {
 
 namespace {
 
-int keep_inliers(Frame& frame) {
-  int n = 0;
-  for (std::size_t i = 0; i < frame.points.size(); ++i) {
-    if (!frame.points[i]) continue;
-    if (frame.outlier[i]) {
-      frame.points[i] = nullptr;
-      frame.outlier[i] = 0;
-    } else {
-      ++n;
-    }
-  }
-  return n;
-}
-
 std::vector<LoopEvent::KeyFramePose> keyframe_poses(const Map& map) {
   std::vector<LoopEvent::KeyFramePose> out;
   for (const auto& k : map.keyframes())
@@ -210,11 +196,11 @@ std::unique_ptr<LoopCloser::LoopMatch> LoopCloser::verify(KeyFrame& kf, KeyFrame
   for (std::size_t k = 0; k < keypoint.size(); ++k)
     if (fit->inliers[k]) frame.points[keypoint[k]] = matches[keypoint[k]];
   optimize_frame_pose(frame);
-  int good = keep_inliers(frame);
+  int good = frame.keep_inlier_matches();
   if (good < opt_.min_refined_inliers) return nullptr;
   search_keyframe_neighbourhood(frame, cand, cand.ordered_connections.size(), opt_.guided_search_radius);
   optimize_frame_pose(frame);
-  good = keep_inliers(frame);
+  good = frame.keep_inlier_matches();
   if (good < opt_.min_inliers) return nullptr;
   bool anchored = false;
   for (const auto& [n, w] : kf.connections) anchored |= !n->bad && n->id < kf.id - opt_.min_keyframe_gap;

@@ -15,25 +15,6 @@
 
 namespace builtscene::slam {
 
-namespace {
-
-// Drops the matches pose optimization marked as outliers; returns the inliers left.
-int keep_inliers(Frame& frame) {
-  int n = 0;
-  for (std::size_t i = 0; i < frame.points.size(); ++i) {
-    if (!frame.points[i]) continue;
-    if (frame.outlier[i]) {
-      frame.points[i] = nullptr;
-      frame.outlier[i] = 0;
-    } else {
-      ++n;
-    }
-  }
-  return n;
-}
-
-}  // namespace
-
 Relocalizer::Relocalizer(const KeyFrameDatabase& database, RelocalizerOptions options)
     : db_(database), opt_(options) {}
 
@@ -88,18 +69,18 @@ std::shared_ptr<KeyFrame> Relocalizer::relocalize(Frame& frame) const {
     frame.set_pose(SE3(Re, te));
     for (int j : inliers) frame.points[static_cast<std::size_t>(keypoint[static_cast<std::size_t>(j)])] = matches[static_cast<std::size_t>(keypoint[static_cast<std::size_t>(j)])];
     optimize_frame_pose(frame);
-    int good = keep_inliers(frame);
+    int good = frame.keep_inlier_matches();
     if (good < 10) continue;
     if (good < opt_.min_inliers) {
       // Guided search: ORB-SLAM's wide window first, then a narrow one once the pose is better.
       const int added = search_local_map(frame, *kf, 4.0f);
       if (good + added >= opt_.min_inliers) {
         optimize_frame_pose(frame);
-        good = keep_inliers(frame);
+        good = frame.keep_inlier_matches();
         if (good > 30 && good < opt_.min_inliers) {
           search_local_map(frame, *kf, 1.5f);
           optimize_frame_pose(frame);
-          good = keep_inliers(frame);
+          good = frame.keep_inlier_matches();
         }
       }
     }
