@@ -46,13 +46,14 @@ class KitchenDepthOdometry : public ::testing::Test {
 TEST_F(KitchenDepthOdometry, ConsecutiveFramesGiveTheTrueMotion) {
   for (std::size_t prev : {40u, 150u, 260u, 520u, 800u}) {
     const std::size_t cur = prev + 1;
-    const auto T = odometry_->align(gray(prev), data_->load_depth(prev), gray(cur), data_->load_depth(cur), SE3());
+    const cv::Mat prev_depth = data_->load_depth(prev), cur_depth = data_->load_depth(cur);
+    const auto T = odometry_->align(gray(prev), prev_depth, gray(cur), cur_depth, SE3());
     ASSERT_TRUE(T.has_value()) << "frames " << prev << "-" << cur;
     const SE3 err = true_motion(prev, cur).inverse() * *T;
     EXPECT_LT(err.translation().norm(), 0.02) << "frames " << prev << "-" << cur;
     EXPECT_LT(err.log().tail<3>().norm() * 180 / M_PI, 2.0) << "frames " << prev << "-" << cur;
     const double agreement =
-        odometry_->depth_agreement(data_->load_depth(prev), data_->load_depth(cur), true_motion(prev, cur));
+        odometry_->depth_agreement(prev_depth, cur_depth, true_motion(prev, cur));
     std::printf("frames %zu-%zu: error %.1f mm, depth agreement under the true motion %.3f\n", prev, cur,
                 1000 * err.translation().norm(), agreement);
     EXPECT_GT(agreement, DepthOdometry::kMinDepthAgreement);
@@ -63,10 +64,11 @@ TEST_F(KitchenDepthOdometry, ViewsOfAnotherPlaceAreRefused) {
   // Frame 299 and frame 80: 0.76 m and 30 degrees apart (the relocalization test's jump).
   const SE3 jump = true_motion(299, 80);
   ASSERT_GT(jump.translation().norm(), 0.5);
-  const auto T = odometry_->align(gray(299), data_->load_depth(299), gray(80), data_->load_depth(80), SE3());
+  const cv::Mat depth_299 = data_->load_depth(299), depth_80 = data_->load_depth(80);
+  const auto T = odometry_->align(gray(299), depth_299, gray(80), depth_80, SE3());
   EXPECT_FALSE(T.has_value()) << "accepted a motion of " << T->translation().norm() << " m";
   // The refusal is by the depth check: the identity motion does not explain the other view.
-  const double agreement = odometry_->depth_agreement(data_->load_depth(299), data_->load_depth(80), SE3());
+  const double agreement = odometry_->depth_agreement(depth_299, depth_80, SE3());
   std::printf("frames 299-80: depth agreement under no motion %.3f\n", agreement);
   EXPECT_LT(agreement, DepthOdometry::kMinDepthAgreement);
 }
