@@ -72,7 +72,7 @@ void add_stage_options(CLI::App& cmd, barcode::ScanOptions& o, std::string& deco
   cmd.add_option("--threads", o.threads, "Worker threads (output does not depend on it)")->capture_default_str();
 }
 
-const bool group = register_group("barcodes", "1D barcodes from warehouse video scans");
+const bool group_barcodes = register_group("barcodes", "1D barcodes from warehouse video scans");
 
 const bool registered_scan = register_command({
     .path = {"barcodes", "scan"},

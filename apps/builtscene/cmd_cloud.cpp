@@ -45,7 +45,7 @@ nlohmann::json run_cloud(const CloudOptions& o) {
           {"stage_ms", r.timer.summary()}};
 }
 
-const bool registered = register_command({
+const bool registered_cloud = register_command({
     .path = {"cloud"},
     .description = "Coloured point cloud (binary PLY) from posed frames, optionally updated only inside a region",
     .setup = [](CLI::App& cmd) -> Action {

@@ -27,7 +27,7 @@ namespace fs = std::filesystem;
 using namespace builtscene::couple;
 using nlohmann::json;
 
-const bool group = register_group("couple", "Distributed coupling analysis: models, message wrapper, LCM");
+const bool group_couple = register_group("couple", "Distributed coupling analysis: models, message wrapper, LCM");
 
 struct NewModelOptions {
   fs::path config, out;

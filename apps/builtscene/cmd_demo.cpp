@@ -79,7 +79,7 @@ nlohmann::json run_demo(const DemoOptions& opt) {
   return summary;
 }
 
-const bool registered = register_command({
+const bool registered_demo = register_command({
     .path = {"demo"},
     .description = "Run every pillar on generated data and write a report (DIR/index.html)",
     .setup = [](CLI::App& cmd) -> Action {

@@ -86,7 +86,7 @@ nlohmann::json run_markers(const MarkerEvalOptions& o) {
   return to_json(e);
 }
 
-const bool group = register_group("eval", "Accuracy evaluation against ground truth");
+const bool group_eval = register_group("eval", "Accuracy evaluation against ground truth");
 
 const bool ate = register_command({
     .path = {"eval", "ate"},

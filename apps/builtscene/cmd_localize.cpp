@@ -110,7 +110,7 @@ nlohmann::json run_localize(const LocalizeOptions& opt) {
   return j;
 }
 
-const bool registered = register_command({
+const bool registered_localize = register_command({
     .path = {"localize"},
     .description = "Localization mode in a saved map: relocalize, then track every frame; the map is not changed",
     .setup = [](CLI::App& cmd) -> Action {

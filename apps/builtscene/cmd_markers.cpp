@@ -61,7 +61,7 @@ nlohmann::json run_measure(const MeasureOptions& o) {
           {"frames", posed.frames.size()}, {"skipped_frames", skipped}, {"stage_ms", timer.summary()}};
 }
 
-const bool group = register_group("markers", "AprilTag markers: measurement for accuracy evaluation");
+const bool group_markers = register_group("markers", "AprilTag markers: measurement for accuracy evaluation");
 
 const bool measure = register_command({
     .path = {"markers", "measure"},

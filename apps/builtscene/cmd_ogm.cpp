@@ -6,6 +6,8 @@
 #include "command_registry.hpp"
 #include "core/errors.hpp"
 #include "core/logging.hpp"
+#include "eval/trajectory_error.hpp"
+#include "ogm/grid_resampling.hpp"
 #include "ogm/map_comparison.hpp"
 #include "ogm/map_drawing.hpp"
 #include "ogm/map_server_io.hpp"
@@ -81,20 +83,39 @@ nlohmann::json run_build(BuildOptions o) {
 }
 
 struct CompareOptions {
-  std::string map, truth;
+  std::string map, truth, est, gt;
   int tolerance = 1;
 };
 
+// A grid built beside a SLAM lies in a ground frame of the SLAM's world; the truth map in the
+// ground truth's z-up world. With --est/--gt the grid is carried over: ground -> SLAM world
+// (the grid's ground_frame_T_gw) -> ground-truth world (the SE3 alignment of the estimated
+// trajectory to the ground truth), in the floor plane, before it is scored.
 nlohmann::json run_compare(const CompareOptions& o) {
-  const MapScore s = compare_maps(load_map_server(o.map), load_map_server(o.truth), o.tolerance);
+  if (o.est.empty() != o.gt.empty()) throw InputError("--est and --gt go together (the grid's trajectory and its ground truth)");
+  OccupancyGrid map = load_map_server(o.map);
+  const OccupancyGrid truth = load_map_server(o.truth);
+  nlohmann::json aligned;
+  if (!o.est.empty()) {
+    const auto T_gw = read_ground_frame(o.map);
+    if (!T_gw)
+      throw InputError(located(o.map, 0, "ground_frame_T_gw: missing (needed with --est/--gt to carry the grid into the ground truth's world)"));
+    const AteResult ate = absolute_trajectory_error(read_tum_trajectory(o.gt), read_tum_trajectory(o.est), Alignment::kSE3);
+    const SE3 T_tw(ate.est_to_gt.rotation(), ate.est_to_gt.translation());
+    const Pose2D T = planar_part(T_tw * T_gw->inverse());
+    map = resample_grid(map, T, truth);
+    aligned = {{"pairs", ate.stats.count}, {"ate_rmse", ate.stats.rmse}, {"x", T.x}, {"y", T.y}, {"theta", T.theta}};
+  }
+  const MapScore s = compare_maps(map, truth, o.tolerance);
   spdlog::info("occupied precision {:.3f}, recall {:.3f}, free agreement {:.3f}", s.occupied_precision,
                s.occupied_recall, s.free_agreement);
   nlohmann::json j = to_json(s);
   j["tolerance_cells"] = o.tolerance;
+  if (!aligned.is_null()) j["aligned"] = aligned;
   return j;
 }
 
-const bool group = register_group("ogm", "Occupancy grid maps from virtual laser scans");
+const bool group_ogm = register_group("ogm", "Occupancy grid maps from virtual laser scans");
 
 const bool build = register_command({
     .path = {"ogm", "build"},
@@ -132,6 +153,10 @@ const bool compare = register_command({
       cmd.add_option("--map", o->map, "Estimated map_server YAML")->required();
       cmd.add_option("--truth", o->truth, "Ground-truth map_server YAML")->required();
       cmd.add_option("--tolerance", o->tolerance, "Tolerance in cells")->capture_default_str()->check(CLI::NonNegativeNumber);
+      cmd.add_option("--est", o->est,
+                     "The trajectory of the grid's world (TUM; e.g. the SLAM's keyframes): with --gt, the grid is "
+                     "carried into the ground truth's world before scoring");
+      cmd.add_option("--gt", o->gt, "Ground-truth trajectory (TUM) in the truth map's z-up world");
       return [o] { return run_compare(*o); };
     },
     .order = 31});

@@ -67,7 +67,7 @@ nlohmann::json run_plan(const PlanOptions& o) {
           {"map_cells", static_cast<std::size_t>(grid.width()) * static_cast<std::size_t>(grid.height())}};
 }
 
-const bool registered = register_command({
+const bool registered_plan = register_command({
     .path = {"plan"},
     .description = "A* path planning on an occupancy grid map (map_server YAML)",
     .setup = [](CLI::App& cmd) -> Action {

@@ -231,7 +231,7 @@ nlohmann::json run_eval(const EvalOptions& o) {
   return j;
 }
 
-const bool group = register_group("saft", "SAFT, the learned patch descriptor: training and evaluation");
+const bool group_saft = register_group("saft", "SAFT, the learned patch descriptor: training and evaluation");
 
 const bool train = register_command({
     .path = {"saft", "train"},

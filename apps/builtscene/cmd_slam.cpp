@@ -216,7 +216,7 @@ nlohmann::json run_slam(const SlamOptions& opt) {
   return j;
 }
 
-const bool registered = register_command({
+const bool registered_slam = register_command({
     .path = {"slam"},
     .description = "RGB-D SLAM on a TUM-layout sequence: trajectory of every tracked frame and keyframes",
     .setup = [](CLI::App& cmd) -> Action {
@@ -256,6 +256,9 @@ const bool registered = register_command({
           ->capture_default_str();
       cmd.add_option("--ogm-frames", opt->ogm.frames,
                      "Output folder: a picture of the grid after each keyframe (keyframe_NNNNN.png)");
+      cmd.add_option("--ogm-loop-snapshots", opt->ogm.loop_snapshots,
+                     "Output folder: the grid just before and just after each loop-closure rebuild "
+                     "(loop_N_before/after.yaml with the keyframe poses it was built from, loop_N_*_keyframes.txt)");
       cmd.add_option("--ogm-every", opt->ogm.batches.full_batch_every,
                      "Rebuild the grid from all keyframes every N keyframes (0 = only after loops and at the end)")
           ->capture_default_str()

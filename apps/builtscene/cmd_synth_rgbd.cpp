@@ -16,7 +16,7 @@ struct SynthRgbdCli {
   std::string out;
 };
 
-const bool registered = register_command({
+const bool registered_synth_rgbd = register_command({
     .path = {"synth", "rgbd"},
     .description = "Generate an RGB-D sequence of a built world with exact ground truth (TUM layout)",
     .setup = [](CLI::App& cmd) -> Action {
@@ -47,7 +47,7 @@ const bool registered = register_command({
     },
     .order = 10});
 
-const bool group = register_group("synth", "Generated test worlds with exact ground truth");
+const bool group_synth_rgbd = register_group("synth", "Generated test worlds with exact ground truth");
 
 }  // namespace
 }  // namespace builtscene::app

@@ -36,7 +36,7 @@ nlohmann::json run(Options opt) {
           {"seconds", r.seconds}};
 }
 
-const bool registered = register_command({
+const bool registered_synth_warehouse = register_command({
     .path = {"synth", "warehouse"},
     .description = "Generated warehouse scan video (racks, location and product labels) with truth.csv",
     .setup = [](CLI::App& cmd) -> Action {

@@ -135,9 +135,9 @@ nlohmann::json run_train(const VocabOptions& opt) {
           {"stage_ms", timer.summary()}};
 }
 
-const bool group = register_group("vocab", "Bag-of-words vocabularies for place recognition");
+const bool group_vocab = register_group("vocab", "Bag-of-words vocabularies for place recognition");
 
-const bool registered = register_command({
+const bool registered_vocab = register_command({
     .path = {"vocab", "train"},
     .description = "Train a bag-of-words vocabulary (hierarchical k-means on ORB descriptors)",
     .setup = [](CLI::App& cmd) -> Action {

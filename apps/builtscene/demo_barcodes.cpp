@@ -19,7 +19,7 @@ std::string row(const std::string& name, const barcode::ScanResult& r, const bar
       e.false_codes, r.seconds > 0 ? r.frames / r.seconds : 0.0);
 }
 
-DemoSection run(const fs::path& dir) {
+DemoSection run_barcodes_demo(const fs::path& dir) {
   synth::WarehouseOptions w;
   w.seed = 3;
   w.frames = 240;
@@ -71,7 +71,7 @@ DemoSection run(const fs::path& dir) {
                          {"decoder_only_fps", rd.seconds > 0 ? rd.frames / rd.seconds : 0.0}}};
 }
 
-const bool registered = register_demo_part({.name = "barcodes", .order = 30, .run = run});
+const bool registered_demo_barcodes = register_demo_part({.name = "barcodes", .order = 30, .run = run_barcodes_demo});
 
 }  // namespace
 }  // namespace builtscene::app

@@ -70,7 +70,7 @@ std::vector<double> times(std::size_t n, double dt) {
   return t;
 }
 
-DemoSection run(const fs::path& dir) {
+DemoSection run_couple_demo(const fs::path& dir) {
   const fs::path ex = example_dir();
   Run off = run_case(ex / "scenario-no-control.yaml", dir, "no-control");
   Run on = run_case(ex / "scenario.yaml", dir, "control");
@@ -115,7 +115,7 @@ DemoSection run(const fs::path& dir) {
   return {"Distributed coupling: wind, structure and active control", buf, summary};
 }
 
-const bool registered = register_demo_part({.name = "couple", .order = 40, .run = run});
+const bool registered_demo_couple = register_demo_part({.name = "couple", .order = 40, .run = run_couple_demo});
 
 }  // namespace
 }  // namespace builtscene::app

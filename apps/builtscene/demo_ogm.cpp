@@ -112,7 +112,7 @@ DemoSection run_ogm_demo(const std::filesystem::path& dir) {
   return s;
 }
 
-const bool registered = register_demo_part({.name = "ogm", .order = 20, .run = run_ogm_demo});
+const bool registered_demo_ogm = register_demo_part({.name = "ogm", .order = 20, .run = run_ogm_demo});
 
 }  // namespace
 }  // namespace builtscene::app

@@ -34,7 +34,7 @@ DemoSection run_rgbd_demo(const std::filesystem::path& dir) {
   return {"Generated RGB-D world with exact ground truth", html, summary};
 }
 
-const bool registered = register_demo_part({.name = "rgbd", .order = 10, .run = run_rgbd_demo});
+const bool registered_demo_rgbd = register_demo_part({.name = "rgbd", .order = 10, .run = run_rgbd_demo});
 
 }  // namespace
 }  // namespace builtscene::app

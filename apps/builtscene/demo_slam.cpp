@@ -142,7 +142,7 @@ DemoSection run_slam_demo(const std::filesystem::path& dir) {
   return s;
 }
 
-const bool registered = register_demo_part({.name = "slam", .order = 15, .run = run_slam_demo});
+const bool registered_demo_slam = register_demo_part({.name = "slam", .order = 15, .run = run_slam_demo});
 
 }  // namespace
 }  // namespace builtscene::app

@@ -24,10 +24,11 @@ SlamOgmOutput::SlamOgmOutput(SlamOgmOptions options, const PinholeCamera& camera
     std::ofstream f(probe, std::ios::app);
     if (!f) throw InputError(located(probe, 0, "cannot write the occupancy grid"));
   }
-  if (!options_.frames.empty()) {
+  for (const auto& dir : {options_.frames, options_.loop_snapshots}) {
+    if (dir.empty()) continue;
     std::error_code ec;
-    std::filesystem::create_directories(options_.frames, ec);
-    if (ec) throw InputError(located(options_.frames, 0, "cannot create the folder: " + ec.message()));
+    std::filesystem::create_directories(dir, ec);
+    if (ec) throw InputError(located(dir, 0, "cannot create the folder: " + ec.message()));
   }
 }
 
@@ -36,6 +37,8 @@ void SlamOgmOutput::consume(const PosesAndLaserScans& batch) {
   mapper_.integrate_batch(batch.pairs);
   if (lcm_) lcm_->publish(batch);
   ++batches_;
+  if (batch.full) grid_poses_.clear();
+  for (std::size_t i = 0; i < batch.stamps.size() && i < batch.T_wc.size(); ++i) grid_poses_[batch.stamps[i]] = batch.T_wc[i];
   if (batch.full) {
     ++full_batches_;
     keyframe_poses_.clear();
@@ -44,6 +47,15 @@ void SlamOgmOutput::consume(const PosesAndLaserScans& batch) {
     keyframe_poses_.push_back(batch.pairs.front().pose);
     last_scan_ = batch.pairs.front().scan;
   }
+}
+
+void SlamOgmOutput::write_snapshot(const std::string& name) const {
+  const std::filesystem::path yaml = options_.loop_snapshots / (name + ".yaml");
+  save_map_server(mapper_.grid(), yaml);
+  append_ground_frame(yaml, emitter_->ground().T_gw());
+  Trajectory poses;
+  for (const auto& [stamp, T] : grid_poses_) poses.push_back({stamp, T});
+  write_tum_trajectory(options_.loop_snapshots / (name + "_keyframes.txt"), poses);
 }
 
 void SlamOgmOutput::subscribe(slam::System& system) {
@@ -62,8 +74,11 @@ void SlamOgmOutput::rebuild_after_loops(slam::System& system) {
   if (!emitter_) return;  // no scan yet: the first keyframes will build from corrected poses
   const auto start = std::chrono::steady_clock::now();
   // Poses read now are the optimized ones (the event is sent after they were written).
+  const std::string name = "loop_" + std::to_string(loop_rebuilds_ + 1);
+  if (!options_.loop_snapshots.empty()) write_snapshot(name + "_before");
   consume(emitter_->full_batch(system.keyframe_trajectory()));
   ++loop_rebuilds_;
+  if (!options_.loop_snapshots.empty()) write_snapshot(name + "_after");
   system.timer().add("ogm", ms_since(start));
 }
 

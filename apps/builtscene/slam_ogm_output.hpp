@@ -4,6 +4,7 @@
 // the grid; every N keyframes, after every loop closure and at the end, the batch of all
 // keyframes with their optimized poses rebuilds it. Batches also go out over LCM (--lcm URL).
 #include <filesystem>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -26,7 +27,10 @@ struct SlamOgmOptions {
   PosesAndLaserScansOptions batches;
   std::string lcm_url;             // empty: no LCM
   std::filesystem::path frames;    // folder for a picture of the grid after each keyframe (empty: none)
-  bool enabled() const { return !out.empty() || !lcm_url.empty() || !frames.empty(); }
+  // Folder for the grid just before and just after each loop-closure rebuild, each with the
+  // keyframe poses it was built from, so the rebuild can be scored (empty: none).
+  std::filesystem::path loop_snapshots;
+  bool enabled() const { return !out.empty() || !lcm_url.empty() || !frames.empty() || !loop_snapshots.empty(); }
 };
 
 class SlamOgmOutput {
@@ -50,6 +54,7 @@ class SlamOgmOutput {
   OccupancyGridMapper mapper_;
   std::unique_ptr<LcmPublisher> lcm_;
   std::vector<Pose2D> keyframe_poses_;
+  std::map<double, SE3> grid_poses_;  // the SLAM-world pose each keyframe in the grid was drawn with
   long batches_ = 0, full_batches_ = 0, keyframes_drawn_ = 0;
   LaserScan last_scan_;
   long loop_rebuilds_ = 0;
@@ -61,6 +66,7 @@ class SlamOgmOutput {
   void rebuild_after_loops(slam::System& system);
 
   void consume(const PosesAndLaserScans& batch);
+  void write_snapshot(const std::string& name) const;
 };
 
 }  // namespace builtscene::app

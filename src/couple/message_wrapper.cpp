@@ -20,11 +20,6 @@ namespace {
 using Clock = std::chrono::steady_clock;
 using nlohmann::json;
 
-int64_t now_us() {
-  return std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::system_clock::now().time_since_epoch())
-      .count();
-}
-
 json merged(const LcmCodec& codec, const json& values, int64_t step) {
   json v = codec.zero();
   for (const auto& [k, val] : values.items()) v[k] = val;

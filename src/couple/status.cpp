@@ -2,6 +2,7 @@
 
 #include "couple/lcm_codec.hpp"
 
+#include <chrono>
 #include <limits>
 
 namespace builtscene::couple {
@@ -24,6 +25,11 @@ struct status_t {
   double granted;
 }
 )";
+}
+
+int64_t now_us() {
+  return std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::system_clock::now().time_since_epoch())
+      .count();
 }
 
 std::string status_channel(const std::string& model) {

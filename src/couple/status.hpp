@@ -21,6 +21,8 @@ inline constexpr const char* kRecorderName = "(recorder)";
 // exchanges data with: when every wrapper heard every status, a run of N models cost
 // O(N^2) deliveries and the mediator saturated at a few tens of models.
 std::string status_channel(const std::string& model);
+// Wall-clock time in microseconds since the epoch, the `utime` of statuses and log events.
+int64_t now_us();
 bool is_status_channel(const std::string& channel);
 
 enum class ModelState : int8_t { kRunning = 0, kWaiting = 1, kDone = 2, kFailed = 3, kStopped = 4 };

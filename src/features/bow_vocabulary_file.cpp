@@ -19,8 +19,8 @@ namespace builtscene {
 
 namespace {
 
-constexpr char kMagic[8] = {'B', 'S', 'V', 'O', 'C', 'A', 'B', '\n'};
-constexpr std::uint32_t kVersion = 1;
+constexpr char kVocabularyMagic[8] = {'B', 'S', 'V', 'O', 'C', 'A', 'B', '\n'};
+constexpr std::uint32_t kVocabularyVersion = 1;
 
 static_assert(std::endian::native == std::endian::little, "the vocabulary file is written in native little-endian");
 
@@ -60,8 +60,8 @@ class Reader {
 
 void BowVocabulary::save(const std::filesystem::path& path) const {
   if (empty()) throw Failure("vocabulary: nothing to save (empty vocabulary)");
-  std::string out(kMagic, sizeof(kMagic));
-  put<std::uint32_t>(out, kVersion);
+  std::string out(kVocabularyMagic, sizeof(kVocabularyMagic));
+  put<std::uint32_t>(out, kVocabularyVersion);
   put<std::uint32_t>(out, kind_ == DescriptorKind::kBinary ? 0u : 1u);
   put<std::uint32_t>(out, static_cast<std::uint32_t>(cols_));
   put<std::uint32_t>(out, static_cast<std::uint32_t>(k_));
@@ -84,16 +84,16 @@ BowVocabulary BowVocabulary::load(const std::filesystem::path& path) {
   std::ifstream f(path, std::ios::binary);
   if (!f) throw InputError(located(path, 0, "cannot open vocabulary file"));
   const std::string bytes((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
-  if (bytes.size() < sizeof(kMagic) || std::memcmp(bytes.data(), kMagic, sizeof(kMagic)) != 0)
+  if (bytes.size() < sizeof(kVocabularyMagic) || std::memcmp(bytes.data(), kVocabularyMagic, sizeof(kVocabularyMagic)) != 0)
     throw InputError(located(path, 0, "not a builtscene vocabulary file (bad magic)"));
-  if (bytes.size() < sizeof(kMagic) + 4 + 8) throw InputError(located(path, 0, "truncated vocabulary file (header)"));
+  if (bytes.size() < sizeof(kVocabularyMagic) + 4 + 8) throw InputError(located(path, 0, "truncated vocabulary file (header)"));
   Reader header(bytes, bytes.size(), path);
-  char magic[sizeof(kMagic)];
+  char magic[sizeof(kVocabularyMagic)];
   header.raw(magic, sizeof(magic), "magic");
   const auto version = header.get<std::uint32_t>("version");
-  if (version != kVersion)
+  if (version != kVocabularyVersion)
     throw InputError(located(path, 0, "vocabulary file version " + std::to_string(version) + " is not supported (expected " +
-                                          std::to_string(kVersion) + ")"));
+                                          std::to_string(kVocabularyVersion) + ")"));
   // Checksum before anything else is trusted: flipped bytes anywhere are caught here.
   const std::size_t body = bytes.size() - 8;
   std::uint64_t stored;

@@ -13,8 +13,8 @@
 namespace builtscene {
 namespace {
 
-constexpr char kMagic[8] = {'B', 'S', 'S', 'A', 'F', 'T', '0', '1'};
-constexpr std::uint32_t kVersion = 1;
+constexpr char kWeightsMagic[8] = {'B', 'S', 'S', 'A', 'F', 'T', '0', '1'};
+constexpr std::uint32_t kWeightsVersion = 1;
 
 // Parameters, then the batch-norm running statistics (the int64 step counter is not needed
 // at inference and is skipped), in registration order: the file's tensor order.
@@ -48,9 +48,9 @@ SaftNetwork SaftNetwork::load(const std::filesystem::path& file, SaftNetworkOpti
   std::uint32_t header[3];
   in.read(magic, sizeof magic);
   in.read(reinterpret_cast<char*>(header), sizeof header);
-  if (!in || std::memcmp(magic, kMagic, sizeof magic) != 0)
+  if (!in || std::memcmp(magic, kWeightsMagic, sizeof magic) != 0)
     throw InputError(file.string() + ": not a SAFT weights file (bad magic)");
-  if (header[0] != kVersion) throw InputError(file.string() + ": SAFT weights version " + std::to_string(header[0]) + ", expected 1");
+  if (header[0] != kWeightsVersion) throw InputError(file.string() + ": SAFT weights version " + std::to_string(header[0]) + ", expected 1");
   if (header[1] != static_cast<std::uint32_t>(kDimension))
     throw InputError(file.string() + ": SAFT weights of dimension " + std::to_string(header[1]) + ", this build expects " +
                      std::to_string(kDimension));
@@ -83,8 +83,8 @@ void SaftNetwork::save(const std::filesystem::path& file) const {
   std::ofstream out(file, std::ios::binary);
   if (!out) throw InputError(file.string() + ": cannot write the SAFT weights file");
   auto tensors = stored_tensors(impl_->net);
-  const std::uint32_t header[3] = {kVersion, static_cast<std::uint32_t>(kDimension), static_cast<std::uint32_t>(tensors.size())};
-  out.write(kMagic, sizeof kMagic);
+  const std::uint32_t header[3] = {kWeightsVersion, static_cast<std::uint32_t>(kDimension), static_cast<std::uint32_t>(tensors.size())};
+  out.write(kWeightsMagic, sizeof kWeightsMagic);
   out.write(reinterpret_cast<const char*>(header), sizeof header);
   for (auto& t : tensors) {
     const torch::Tensor c = t.detach().to(torch::kFloat32).contiguous();

@@ -9,7 +9,6 @@
 namespace builtscene::synth {
 namespace {
 
-constexpr double kPi = std::numbers::pi;
 using V2 = Eigen::Vector2d;
 using V3 = Eigen::Vector3d;
 
@@ -36,12 +35,12 @@ struct Wobble {
     for (int i = 0; i < 4; ++i) {
       a[i] = amplitude / 2.0 * rng.uniform(0.5, 1.0);
       f[i] = rng.uniform(f0, f1);
-      p[i] = rng.uniform(0, 2 * kPi);
+      p[i] = rng.uniform(0, 2 * std::numbers::pi);
     }
   }
   double operator()(double t) const {
     double v = 0;
-    for (int i = 0; i < 4; ++i) v += a[i] * std::sin(2 * kPi * f[i] * t + p[i]);
+    for (int i = 0; i < 4; ++i) v += a[i] * std::sin(2 * std::numbers::pi * f[i] * t + p[i]);
     return v;
   }
 };
@@ -132,7 +131,7 @@ MotionResult robot_motion(const Scene& scene, const MotionOptions& opt) {
   for (std::size_t i = 0; i < n; ++i) loop_time += ds / v[i];
   const int frames = opt.frames > 0 ? opt.frames : static_cast<int>(std::ceil(opt.loops * loop_time * opt.fps)) + 1;
   Rng rng(opt.seed ^ 0x5151ull);
-  const Wobble pitch_w(rng, 0.4 * kPi / 180, 1.0, 4.0), roll_w(rng, 0.3 * kPi / 180, 1.0, 4.0), yaw_w(rng, 0.3 * kPi / 180, 0.3, 2.0),
+  const Wobble pitch_w(rng, 0.4 * std::numbers::pi / 180, 1.0, 4.0), roll_w(rng, 0.3 * std::numbers::pi / 180, 1.0, 4.0), yaw_w(rng, 0.3 * std::numbers::pi / 180, 0.3, 2.0),
       z_w(rng, 0.004, 1.5, 5.0), lat_w(rng, 0.02, 0.05, 0.2);
   const double dt = 1.0 / opt.fps;
   double s = 0;
@@ -144,11 +143,11 @@ MotionResult robot_motion(const Scene& scene, const MotionOptions& opt) {
     const double a = idx - std::floor(idx);
     const V2 p = path[i0].p * (1 - a) + path[i1].p * a;
     double dh = path[i1].heading - path[i0].heading;
-    dh = std::remainder(dh, 2 * kPi);
+    dh = std::remainder(dh, 2 * std::numbers::pi);
     const double heading = path[i0].heading + a * dh + yaw_w(t);
     const V2 dir(std::cos(path[i0].heading), std::sin(path[i0].heading));
     const V2 pl = p + V2(-dir.y(), dir.x()) * lat_w(t);  // the driver does not hold the line exactly
-    const double pitch = opt.robot_pitch_deg * kPi / 180 + pitch_w(t);
+    const double pitch = opt.robot_pitch_deg * std::numbers::pi / 180 + pitch_w(t);
     const V3 fwd(std::cos(heading) * std::cos(pitch), std::sin(heading) * std::cos(pitch), -std::sin(pitch));
     res.poses.push_back(make_pose(V3(pl.x(), pl.y(), opt.robot_camera_height + z_w(t)), fwd, roll_w(t)));
     // Advance along the loop (midpoint rule).
@@ -213,7 +212,7 @@ MotionResult handheld_motion(const Scene& scene, const MotionOptions& opt) {
   std::vector<V3> ps;
   std::vector<V2> angles;  // yaw (unwrapped), pitch
   double t = 0;
-  double yaw_prev = rng.uniform(-kPi, kPi);
+  double yaw_prev = rng.uniform(-std::numbers::pi, std::numbers::pi);
   auto view_of = [&](const V3& eye, bool want_far_turn, double& yaw, double& pitch) {
     // Visible look targets at a comfortable distance; a fast turn prefers one far around.
     std::vector<std::pair<double, V3>> cand;
@@ -224,7 +223,7 @@ MotionResult handheld_motion(const Scene& scene, const MotionOptions& opt) {
       const auto hit = raycast(surfaces, eye, d / dist, 1e-3);
       if (hit && *hit < dist - 0.15) continue;
       const double y = std::atan2(d.y(), d.x());
-      const double turn = std::abs(std::remainder(y - yaw_prev, 2 * kPi));
+      const double turn = std::abs(std::remainder(y - yaw_prev, 2 * std::numbers::pi));
       if (want_far_turn ? turn < 1.6 : turn > 1.7) continue;
       cand.emplace_back(turn, tg);
     }
@@ -238,7 +237,7 @@ MotionResult handheld_motion(const Scene& scene, const MotionOptions& opt) {
     // Nothing listed in view: look where there is the most room, slightly down.
     double best = -1;
     for (int k = 0; k < 16; ++k) {
-      const double y = yaw_prev + (want_far_turn ? kPi : 0) + (k - 8) * kPi / 16 * (want_far_turn ? 0.8 : 0.5);
+      const double y = yaw_prev + (want_far_turn ? std::numbers::pi : 0) + (k - 8) * std::numbers::pi / 16 * (want_far_turn ? 0.8 : 0.5);
       const V3 dir(std::cos(y) * std::cos(0.25), std::sin(y) * std::cos(0.25), -std::sin(0.25));
       const auto hit = raycast(surfaces, eye, dir, 1e-3);
       const double d = hit ? std::min(*hit, 6.0) : 6.0;
@@ -259,13 +258,13 @@ MotionResult handheld_motion(const Scene& scene, const MotionOptions& opt) {
     if (fast) last_fast = t;
     double yaw = 0, pitch = 0;
     view_of(eye, fast, yaw, pitch);
-    yaw = yaw_prev + std::remainder(yaw - yaw_prev, 2 * kPi);  // unwrap
+    yaw = yaw_prev + std::remainder(yaw - yaw_prev, 2 * std::numbers::pi);  // unwrap
     pitch = std::clamp(pitch, -0.9, 0.45);
     if (!ts.empty()) {
       const double dist = (eye - ps.back()).norm();
       const double turn = std::abs(yaw - angles.back().x()) + std::abs(pitch - angles.back().y());
-      const double dtseg = fast ? std::max({dist / 0.8, turn / (200.0 * kPi / 180), 0.35})
-                                : std::max({dist / 0.4, turn / (45.0 * kPi / 180), 1.0});
+      const double dtseg = fast ? std::max({dist / 0.8, turn / (200.0 * std::numbers::pi / 180), 0.35})
+                                : std::max({dist / 0.4, turn / (45.0 * std::numbers::pi / 180), 1.0});
       if (fast) ++res.fast_turns;
       t += dtseg;
     }
@@ -293,8 +292,8 @@ MotionResult handheld_motion(const Scene& scene, const MotionOptions& opt) {
     height = std::clamp(height + rng.uniform(-0.15, 0.15), 1.1, 1.7);
   }
   Rng wr(opt.seed ^ 0xB0Bull);
-  const Wobble yaw_w(wr, 0.5 * kPi / 180, 0.8, 3.0), pitch_w(wr, 0.5 * kPi / 180, 0.8, 3.0), roll_w(wr, 4.0 * kPi / 180, 0.05, 0.3),
-      trem(wr, 0.15 * kPi / 180, 4.0, 8.0), bob(wr, 0.012, 1.6, 2.0), sway(wr, 0.006, 0.8, 1.1);
+  const Wobble yaw_w(wr, 0.5 * std::numbers::pi / 180, 0.8, 3.0), pitch_w(wr, 0.5 * std::numbers::pi / 180, 0.8, 3.0), roll_w(wr, 4.0 * std::numbers::pi / 180, 0.05, 0.3),
+      trem(wr, 0.15 * std::numbers::pi / 180, 4.0, 8.0), bob(wr, 0.012, 1.6, 2.0), sway(wr, 0.006, 0.8, 1.1);
   for (int f = 0; f < frames; ++f) {
     const double tf = f / opt.fps;
     V3 p = hermite(ts, ps, tf);

@@ -11,7 +11,6 @@
 namespace builtscene::synth {
 namespace {
 
-constexpr double kPi = std::numbers::pi;
 using V3 = Eigen::Vector3d;
 
 // Small helper that keeps scene descriptions short.
@@ -107,8 +106,8 @@ class Builder {
     const V3 b = local(x, y, yaw, 0.0, 0.21);
     box("chair_back", b.x(), b.y(), 0.55, 0.44, 0.05, 0.42, yaw, seat_mat);
     box("chair_post", x, y, 0.06, 0.06, 0.06, 0.36, yaw, metal_mat);
-    box("chair_base_a", x, y, 0.0, 0.56, 0.06, 0.06, yaw + kPi / 4, metal_mat);
-    box("chair_base_b", x, y, 0.0, 0.56, 0.06, 0.06, yaw - kPi / 4, metal_mat);
+    box("chair_base_a", x, y, 0.0, 0.56, 0.06, 0.06, yaw + std::numbers::pi / 4, metal_mat);
+    box("chair_base_b", x, y, 0.0, 0.56, 0.06, 0.06, yaw - std::numbers::pi / 4, metal_mat);
   }
   // Shelf with its front (+x local face) showing books.
   void shelf(double x, double y, double yaw, double w, double d, double h, int body_mat, int front_mat) {
@@ -149,23 +148,23 @@ void lab_room(Scene& s) {
   b.wall(W + t / 2, 0, W + t / 2, D, t, 0, H, wall);
 
   // Desk island: two rows facing each other.
-  b.desk(2.3, 3.65, kPi, 1.4, 0.7, woodm, metal, screen, dark, true);
-  b.desk(3.7, 3.65, kPi, 1.4, 0.7, woodm, metal, screen2, dark, true);
+  b.desk(2.3, 3.65, std::numbers::pi, 1.4, 0.7, woodm, metal, screen, dark, true);
+  b.desk(3.7, 3.65, std::numbers::pi, 1.4, 0.7, woodm, metal, screen2, dark, true);
   b.desk(2.3, 4.35, 0.0, 1.4, 0.7, woodm, metal, screen2, dark, true);
   b.desk(3.7, 4.35, 0.0, 1.4, 0.7, woodm, metal, screen, dark, false);
   b.box("books_on_desk", 3.9, 4.3, 0.75, 0.25, 0.3, 0.12, 0.2, books2);
-  b.chair(2.3, 2.9, kPi, fabric, dark);
-  b.chair(3.75, 2.95, kPi + 0.3, fabric, dark);
+  b.chair(2.3, 2.9, std::numbers::pi, fabric, dark);
+  b.chair(3.75, 2.95, std::numbers::pi + 0.3, fabric, dark);
   b.chair(2.25, 5.1, 0.1, fabric, dark);
   b.chair(3.7, 5.15, -0.2, fabric, dark);
   // Desk along the north wall (no chair: the robot passes in front of it).
-  b.desk(3.0, 7.6, kPi, 1.6, 0.7, woodm, metal, screen2, dark, true);
+  b.desk(3.0, 7.6, std::numbers::pi, 1.6, 0.7, woodm, metal, screen2, dark, true);
 
   // Shelves and cabinets along the walls.
   b.shelf(0.2, 2.0, 0.0, 1.0, 0.4, 2.0, woodm, books);
   b.shelf(0.2, 5.6, 0.0, 1.2, 0.4, 1.9, woodm, books2);
-  b.shelf(W - 0.2, 6.0, kPi, 1.0, 0.4, 2.0, woodm, books2);
-  b.shelf(W - 0.25, 2.6, kPi, 0.9, 0.5, 1.1, cabinet, cabinet);
+  b.shelf(W - 0.2, 6.0, std::numbers::pi, 1.0, 0.4, 2.0, woodm, books2);
+  b.shelf(W - 0.25, 2.6, std::numbers::pi, 0.9, 0.5, 1.1, cabinet, cabinet);
 
   // Wall pictures: door, whiteboard, posters, corkboard.
   b.decal("door", V3(5.0, 0, 1.025), V3(0, 1, 0), 0.9, 2.05, b.stretch(b.texture("door", 0)));
@@ -333,15 +332,15 @@ void office(Scene& s) {
   b.wall(7.0, 0, 7.0, 3.85, t, 0, H, wall2);
 
   // Room A (north-west): desks along the north wall, a shelf on the west wall.
-  b.desk(3.5, 9.6, kPi, 1.6, 0.7, woodm, metal, screen, dark, true);
-  b.chair(3.4, 9.0, kPi, fabric, dark);
+  b.desk(3.5, 9.6, std::numbers::pi, 1.6, 0.7, woodm, metal, screen, dark, true);
+  b.chair(3.4, 9.0, std::numbers::pi, fabric, dark);
   b.shelf(0.2, 8.3, 0.0, 1.2, 0.4, 2.0, woodm, b.stretch(b.texture("books", 2)));
-  b.desk(6.45, 8.0, kPi / 2, 1.4, 0.7, woodm, metal, screen, dark, false);
+  b.desk(6.45, 8.0, std::numbers::pi / 2, 1.4, 0.7, woodm, metal, screen, dark, false);
   b.decal("whiteboard", V3(3.5, Y, 1.4), V3(0, -1, 0), 1.8, 0.9, b.stretch(b.texture("whiteboard", 1)));
   b.decal("poster", V3(6.925, 9.0, 1.5), V3(-1, 0, 0), 0.6, 0.8, b.stretch(b.texture("poster", 11)));
   // Room B (north-east).
-  b.desk(10.5, 9.6, kPi, 1.6, 0.7, woodm, metal, screen, dark, true);
-  b.shelf(X - 0.2, 8.0, kPi, 1.0, 0.4, 1.8, woodm, b.stretch(b.texture("books", 3)));
+  b.desk(10.5, 9.6, std::numbers::pi, 1.6, 0.7, woodm, metal, screen, dark, true);
+  b.shelf(X - 0.2, 8.0, std::numbers::pi, 1.0, 0.4, 1.8, woodm, b.stretch(b.texture("books", 3)));
   b.decal("poster", V3(7.075, 8.5, 1.5), V3(1, 0, 0), 0.7, 0.93, b.stretch(b.texture("poster", 12)));
   b.decal("corkboard", V3(10.5, Y, 1.6), V3(0, -1, 0), 1.2, 0.7, b.stretch(b.texture("corkboard", 4)));
   // Room C (south-west).
@@ -352,7 +351,7 @@ void office(Scene& s) {
   // Room D (south-east).
   b.desk(10.5, 0.4, 0.0, 1.6, 0.7, woodm, metal, screen, dark, true);
   b.chair(10.4, 1.0, 0.0, fabric, dark);
-  b.shelf(X - 0.25, 2.0, kPi, 0.9, 0.5, 1.1, metal, metal);
+  b.shelf(X - 0.25, 2.0, std::numbers::pi, 0.9, 0.5, 1.1, metal, metal);
   b.decal("poster", V3(X, 1.0, 1.5), V3(-1, 0, 0), 0.6, 0.8, b.stretch(b.texture("poster", 14)));
   // Corridor ends.
   b.decal("door", V3(0, 5.0, 1.025), V3(1, 0, 0), 0.9, 2.05, b.stretch(b.texture("door", 3)));
@@ -424,7 +423,7 @@ void demo_room(Scene& s) {
   b.wall(-t / 2, 0, -t / 2, Y, t, 0, H, wall);
   b.wall(X + t / 2, 0, X + t / 2, Y, t, 0, H, wall);
   b.shelf(0.2, 2.5, 0.0, 1.2, 0.4, 2.0, woodm, b.stretch(b.texture("books", 5)));
-  b.desk(2.0, Y - 0.4, kPi, 1.4, 0.7, woodm, metal, b.stretch(b.texture("screen", 3)), dark, true);
+  b.desk(2.0, Y - 0.4, std::numbers::pi, 1.4, 0.7, woodm, metal, b.stretch(b.texture("screen", 3)), dark, true);
   b.decal("poster", V3(X, 2.5, 1.5), V3(-1, 0, 0), 0.7, 0.93, b.stretch(b.texture("poster", 16)));
   b.decal("whiteboard", V3(2.0, 0, 1.4), V3(0, 1, 0), 1.6, 0.8, b.stretch(b.texture("whiteboard", 3)));
   b.decal("poster", V3(0.8, Y, 1.6), V3(0, -1, 0), 0.5, 0.67, b.stretch(b.texture("poster", 17)));

@@ -21,7 +21,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-constexpr double kPi = std::numbers::pi;
 constexpr int kLevelH = 440;
 constexpr int kBayW = 2200;
 constexpr int kBeamH = 64;
@@ -203,7 +202,7 @@ void WarehouseScene::build_world(std::uint64_t seed) {
   }
   // Baked light: smooth variation, shadows under beams and diagonal shadow bands that cross labels.
   world_light_.create(H / 4 + 1, W / 4 + 1, CV_32F);
-  const double ph1 = uniform(rng, 0, 2 * kPi), ph2 = uniform(rng, 0, 2 * kPi);
+  const double ph1 = uniform(rng, 0, 2 * std::numbers::pi), ph2 = uniform(rng, 0, 2 * std::numbers::pi);
   std::vector<double> bands;
   for (double x = kMarginX + uniform(rng, 0, 900); x < W; x += uniform(rng, 900, 1700)) bands.push_back(x);
   for (int y = 0; y < world_light_.rows; ++y)
@@ -264,11 +263,11 @@ void WarehouseScene::build_path(std::uint64_t seed) {
   std::vector<double> cum{0};
   for (std::size_t i = 1; i < way.size(); ++i) cum.push_back(cum.back() + cv::norm(way[i] - way[i - 1]));
   // Speed changes: a positive speed profile integrated over the frames.
-  const double p1 = uniform(rng, 0, 2 * kPi), p2 = uniform(rng, 0, 2 * kPi), p3 = uniform(rng, 0, 2 * kPi);
-  const double p4 = uniform(rng, 0, 2 * kPi), p5 = uniform(rng, 0, 2 * kPi), p6 = uniform(rng, 0, 2 * kPi);
+  const double p1 = uniform(rng, 0, 2 * std::numbers::pi), p2 = uniform(rng, 0, 2 * std::numbers::pi), p3 = uniform(rng, 0, 2 * std::numbers::pi);
+  const double p4 = uniform(rng, 0, 2 * std::numbers::pi), p5 = uniform(rng, 0, 2 * std::numbers::pi), p6 = uniform(rng, 0, 2 * std::numbers::pi);
   std::vector<double> dist(static_cast<std::size_t>(N), 0.0);
   for (int t = 1; t < N; ++t) {
-    const double v = std::max(0.15, 1.0 + 0.75 * std::sin(2 * kPi * t / (N / 3.1) + p1));
+    const double v = std::max(0.15, 1.0 + 0.75 * std::sin(2 * std::numbers::pi * t / (N / 3.1) + p1));
     dist[static_cast<std::size_t>(t)] = dist[static_cast<std::size_t>(t) - 1] + v;
   }
   const double total = cum.back();
@@ -287,8 +286,8 @@ void WarehouseScene::build_path(std::uint64_t seed) {
     const double f = d - static_cast<double>(i0);
     cv::Point2d c = at(dist[i0] * (1 - f) + dist[i1] * f);
     // Handheld left-right shake and a little bounce.
-    c.x += 45.0 * std::sin(2 * kPi * t / 23.0 + p2) + 12.0 * std::sin(2 * kPi * t / 7.3 + p3);
-    c.y += 12.0 * std::sin(2 * kPi * t / 31.0 + p4);
+    c.x += 45.0 * std::sin(2 * std::numbers::pi * t / 23.0 + p2) + 12.0 * std::sin(2 * std::numbers::pi * t / 7.3 + p3);
+    c.y += 12.0 * std::sin(2 * std::numbers::pi * t / 31.0 + p4);
     return c;
   };
   cameras_.resize(static_cast<std::size_t>(N));
@@ -297,12 +296,12 @@ void WarehouseScene::build_path(std::uint64_t seed) {
     const cv::Point2d c = centre(t);
     cam.x = c.x;
     cam.y = c.y;
-    cam.scale = kNominalScale * (1.0 + 0.16 * std::sin(2 * kPi * t / (N / 2.3) + p5));
-    const double env = std::abs(std::sin(2 * kPi * t / (N / 1.6) + p6));
-    cam.roll_deg = std::clamp(58.0 * std::sin(2 * kPi * t / (N / 3.7) + p1) * env, -45.0, 45.0);
-    const double ax = 0.10 / (Wf / 2) * std::sin(2 * kPi * t / (N / 1.7) + p3);
-    const double ay = 0.06 / (Hf / 2) * std::sin(2 * kPi * t / (N / 1.3) + p4);
-    const double r = cam.roll_deg * kPi / 180.0;
+    cam.scale = kNominalScale * (1.0 + 0.16 * std::sin(2 * std::numbers::pi * t / (N / 2.3) + p5));
+    const double env = std::abs(std::sin(2 * std::numbers::pi * t / (N / 1.6) + p6));
+    cam.roll_deg = std::clamp(58.0 * std::sin(2 * std::numbers::pi * t / (N / 3.7) + p1) * env, -45.0, 45.0);
+    const double ax = 0.10 / (Wf / 2) * std::sin(2 * std::numbers::pi * t / (N / 1.7) + p3);
+    const double ay = 0.06 / (Hf / 2) * std::sin(2 * std::numbers::pi * t / (N / 1.3) + p4);
+    const double r = cam.roll_deg * std::numbers::pi / 180.0;
     const cv::Matx33d R(std::cos(r), -std::sin(r), 0, std::sin(r), std::cos(r), 0, 0, 0, 1);
     const cv::Matx33d S(cam.scale, 0, 0, 0, cam.scale, 0, 0, 0, 1);
     const cv::Matx33d P(1, 0, 0, 0, 1, 0, ax, ay, 1);
@@ -310,9 +309,9 @@ void WarehouseScene::build_path(std::uint64_t seed) {
     // Motion blur: the image motion of the centre during a 40 % exposure.
     const cv::Point2d v = (centre(t + 0.5) - centre(t - 0.5)) * 0.4;
     cam.blur = cv::Point2d(std::cos(r) * v.x - std::sin(r) * v.y, std::sin(r) * v.x + std::cos(r) * v.y) * cam.scale;
-    cam.defocus = std::max(0.0, 3.4 * std::sin(2 * kPi * t / (N / 4.3) + p2) - 2.0);
-    cam.light = 0.88 + 0.14 * std::sin(2 * kPi * t / (N / 2.1) + p5);
-    cam.light_gradient = {0.22 / Wf * std::sin(2 * kPi * t / (N / 1.9) + p6), 0.12 / Hf * std::sin(2 * kPi * t / (N / 2.9))};
+    cam.defocus = std::max(0.0, 3.4 * std::sin(2 * std::numbers::pi * t / (N / 4.3) + p2) - 2.0);
+    cam.light = 0.88 + 0.14 * std::sin(2 * std::numbers::pi * t / (N / 2.1) + p5);
+    cam.light_gradient = {0.22 / Wf * std::sin(2 * std::numbers::pi * t / (N / 1.9) + p6), 0.12 / Hf * std::sin(2 * std::numbers::pi * t / (N / 2.9))};
   }
 }
 

@@ -15,7 +15,7 @@ namespace builtscene::barcode {
 namespace {
 namespace fs = std::filesystem;
 
-fs::path temp_dir(const std::string& name) {
+fs::path frames_dir(const std::string& name) {
   const fs::path d = fs::temp_directory_path() / ("bs_frames_" + name + "_" + std::to_string(::getpid()));
   fs::remove_all(d);
   fs::create_directories(d);
@@ -42,7 +42,7 @@ cv::Mat label_frame(const std::string& text) {
 }
 
 TEST(FrameSource, BadInputsGiveOneLineErrorsNamingTheFile) {
-  const fs::path d = temp_dir("bad");
+  const fs::path d = frames_dir("bad");
   EXPECT_NE(error_of(d / "missing.avi").find("missing.avi"), std::string::npos);
   fs::create_directories(d / "empty");
   EXPECT_NE(error_of(d / "empty").find("no image files"), std::string::npos);
@@ -59,7 +59,7 @@ TEST(FrameSource, BadInputsGiveOneLineErrorsNamingTheFile) {
 }
 
 TEST(FrameSource, FolderInNaturalOrderAndVideoWithRawPackets) {
-  const fs::path d = temp_dir("ok");
+  const fs::path d = frames_dir("ok");
   for (int i : {10, 2, 1}) cv::imwrite((d / (std::to_string(i) + ".png")).string(), cv::Mat(8, 8, CV_8UC3, cv::Scalar::all(i)));
   std::ofstream(d / "truth.csv") << "ignored";
   auto src = FrameSource::open(d);
@@ -90,7 +90,7 @@ TEST(FrameSource, FolderInNaturalOrderAndVideoWithRawPackets) {
 // Bad input in the middle of a scan: a clear error naming the file, and the inventory keeps
 // exactly what was read before it.
 TEST(FrameSource, CorruptImageMidScanKeepsWhatWasFound) {
-  const fs::path d = temp_dir("mid");
+  const fs::path d = frames_dir("mid");
   cv::imwrite((d / "000.png").string(), label_frame("RM1401A"));
   cv::imwrite((d / "001.png").string(), label_frame("RM1402A"));
   std::ofstream(d / "002.png") << "not a png";
@@ -113,7 +113,7 @@ TEST(FrameSource, CorruptImageMidScanKeepsWhatWasFound) {
 }
 
 TEST(FrameSource, TruncatedVideoIsAnErrorAfterItsGoodFrames) {
-  const fs::path d = temp_dir("trunc");
+  const fs::path d = frames_dir("trunc");
   const fs::path video = d / "t.avi";
   {
     cv::VideoWriter w(video.string(), cv::CAP_FFMPEG, cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), 10, cv::Size(320, 240));

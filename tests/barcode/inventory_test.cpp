@@ -10,7 +10,7 @@ namespace builtscene::barcode {
 namespace {
 namespace fs = std::filesystem;
 
-fs::path temp_dir(const std::string& name) {
+fs::path inventory_dir(const std::string& name) {
   const fs::path d = fs::temp_directory_path() / ("bs_barcode_" + name + "_" + std::to_string(::getpid()));
   fs::remove_all(d);
   fs::create_directories(d);
@@ -42,7 +42,7 @@ TEST(Inventory, DeduplicatesAcrossFramesAndRoundTripsThroughCsv) {
   EXPECT_EQ(entries[0]->last_frame, 9u);
   EXPECT_EQ(entries[0]->best_crop.total(), big.total());
 
-  const fs::path dir = temp_dir("inv");
+  const fs::path dir = inventory_dir("inv");
   inv.write(dir, {{"frames", 10}});
   EXPECT_TRUE(fs::exists(dir / "inventory.json"));
   EXPECT_TRUE(fs::exists(dir / "crops" / "0.png"));
@@ -54,7 +54,7 @@ TEST(Inventory, DeduplicatesAcrossFramesAndRoundTripsThroughCsv) {
 }
 
 TEST(Inventory, MalformedCsvNamesFileAndLine) {
-  const fs::path dir = temp_dir("bad");
+  const fs::path dir = inventory_dir("bad");
   std::ofstream(dir / "inv.csv") << "code,symbology,reads,frames\nX,Code128,many,1\n";
   try {
     Inventory::read_csv(dir / "inv.csv");

@@ -13,6 +13,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "../common/run_cli.hpp"
+#include "io/trajectory.hpp"
 #include "ogm/map_server_io.hpp"
 
 namespace builtscene {
@@ -114,11 +115,51 @@ void check_frame_images() {
   fs::remove_all(dir);
 }
 
+// `ogm compare --est --gt`: a map built in another world (the ground truth moved by a known
+// rigid motion that also tilts it, y down like a SLAM's first camera), its floor found from
+// the data, carried back into the truth's frame, scores like the map built there directly.
+void check_carried_comparison() {
+  const SE3 T_moved_world(Eigen::Quaterniond(Eigen::AngleAxisd(-M_PI / 2, Eigen::Vector3d::UnitX()) *
+                                             Eigen::AngleAxisd(0.6, Eigen::Vector3d::UnitZ())),
+                          Eigen::Vector3d(1.5, -0.7, 2.0));
+  Trajectory moved = read_tum_trajectory(lab_room() / "groundtruth.txt");
+  for (auto& p : moved) p.pose = T_moved_world * p.pose;
+  const auto moved_path = fs::temp_directory_path() / ("bs_ogm_lab_moved_" + std::to_string(::getpid()) + ".txt");
+  write_tum_trajectory(moved_path, moved);
+  const auto out = fs::temp_directory_path() / ("bs_ogm_lab_moved_map_" + std::to_string(::getpid()));
+  const auto r0 = run_cli("ogm build --json --keyframes-only --world auto --dataset " + shell_quote(lab_room()) +
+                          " --poses " + shell_quote(moved_path) + " --out " + shell_quote(out));
+  ASSERT_EQ(r0.exit_code, 0) << r0.err;
+  const std::string truth = shell_quote(lab_room() / "truth_map.yaml"), gt = shell_quote(lab_room() / "groundtruth.txt");
+  const auto r = run_cli("ogm compare --json --map " + shell_quote(out.string() + ".yaml") + " --truth " + truth +
+                         " --est " + shell_quote(moved_path) + " --gt " + gt);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_GE(j["occupied_precision"].get<double>(), 0.90) << r.out;
+  EXPECT_GE(j["occupied_recall"].get<double>(), 0.85) << r.out;
+  EXPECT_GE(j["free_agreement"].get<double>(), 0.95) << r.out;
+  EXPECT_LT(j["aligned"]["ate_rmse"].get<double>(), 1e-6);
+  // Without the carry the same map does not land on the truth.
+  const auto raw = run_cli("ogm compare --json --map " + shell_quote(out.string() + ".yaml") + " --truth " + truth);
+  ASSERT_EQ(raw.exit_code, 0) << raw.err;
+  EXPECT_LT(nlohmann::json::parse(raw.out)["occupied_precision"].get<double>(), 0.5) << raw.out;
+  // Bad input: --est alone, and a map with no ground frame to carry.
+  auto bad = run_cli("ogm compare --map " + shell_quote(out.string() + ".yaml") + " --truth " + truth + " --est " + gt);
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_NE(bad.err.find("--gt"), std::string::npos) << bad.err;
+  bad = run_cli("ogm compare --map " + truth + " --truth " + truth + " --est " + gt + " --gt " + gt);
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_NE(bad.err.find("ground_frame_T_gw"), std::string::npos) << bad.err;
+  EXPECT_NE(bad.err.find("truth_map.yaml"), std::string::npos) << bad.err;
+  fs::remove(moved_path);
+}
+
 // One test: the checks share one generated lab room (generating it takes most of the time).
 TEST(OgmGenerated, LabRoomMapMatchesTheTrueMapAndSeesDeskTopsThatOneHeightMisses) {
   check_map_scores();
   check_desk_tops();
   check_frame_images();
+  check_carried_comparison();
   fs::remove_all(lab_room());
 }
 

@@ -57,8 +57,10 @@ TEST(LoopClosing, TwoLoopsOfTheLabRoomAreClosedAndTheErrorDrops) {
                          shell_quote(world.string()));
   ASSERT_EQ(g.exit_code, 0) << g.err;
 
-  // The occupancy grid rides along on the loop-closing run: it must rebuild after loops.
-  const SlamRun on = run_slam(world, "--ogm-out " + shell_quote((world / "grid").string()));
+  // The occupancy grid rides along on the loop-closing run: it must rebuild after loops, and
+  // the snapshots just before and after each rebuild show what the rebuild did.
+  const SlamRun on = run_slam(world, "--ogm-out " + shell_quote((world / "grid").string()) + " --ogm-loop-snapshots " +
+                                         shell_quote((world / "snapshots").string()));
   const SlamRun off = run_slam(world, "--no-loop-closing");
   ASSERT_FALSE(on.summary.is_null());
   ASSERT_FALSE(off.summary.is_null());
@@ -86,6 +88,34 @@ TEST(LoopClosing, TwoLoopsOfTheLabRoomAreClosedAndTheErrorDrops) {
     EXPECT_GT(t - tm, 5.0);
     EXPECT_LT(apart, 1.5);
   }
+  // The first loop's rebuild: the grid scores better against the world's truth map after it
+  // than just before it (each carried into the truth's frame with its own keyframes' best
+  // rigid alignment to ground truth, so the drifted grid gets its best chance).
+  const auto score = [&](const std::string& name) {
+    const fs::path snap = world / "snapshots" / name;
+    const auto r = run_cli("ogm compare --json --map " + shell_quote(snap.string() + ".yaml") + " --truth " +
+                           shell_quote((world / "truth_map.yaml").string()) + " --est " +
+                           shell_quote(snap.string() + "_keyframes.txt") + " --gt " +
+                           shell_quote((world / "groundtruth.txt").string()));
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    return r.exit_code == 0 ? nlohmann::json::parse(r.out) : nlohmann::json();
+  };
+  const auto before = score("loop_1_before"), after = score("loop_1_after");
+  ASSERT_FALSE(before.is_null());
+  ASSERT_FALSE(after.is_null());
+  const auto f1 = [](const nlohmann::json& s) {
+    const double p = s["occupied_precision"], r = s["occupied_recall"];
+    return p + r > 0 ? 2 * p * r / (p + r) : 0.0;
+  };
+  std::printf("grid at the first loop: before rebuild precision %.3f recall %.3f free %.3f (keyframe ATE %.1f cm), "
+              "after precision %.3f recall %.3f free %.3f (keyframe ATE %.1f cm)\n",
+              before["occupied_precision"].get<double>(), before["occupied_recall"].get<double>(),
+              before["free_agreement"].get<double>(), 100 * before["aligned"]["ate_rmse"].get<double>(),
+              after["occupied_precision"].get<double>(), after["occupied_recall"].get<double>(),
+              after["free_agreement"].get<double>(), 100 * after["aligned"]["ate_rmse"].get<double>());
+  EXPECT_GT(f1(after), f1(before));
+  EXPECT_GE(after["free_agreement"].get<double>(), before["free_agreement"].get<double>());
+
   // Most of the run is tracked either way, and loop closing lowers the error.
   EXPECT_GE(on.ate.matched, on.summary["frames"].get<std::size_t>() * 9 / 10);
   EXPECT_GE(off.ate.matched, off.summary["frames"].get<std::size_t>() * 9 / 10);
