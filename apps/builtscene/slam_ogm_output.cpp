@@ -37,16 +37,16 @@ void SlamOgmOutput::consume(const PosesAndLaserScans& batch) {
   mapper_.integrate_batch(batch.pairs);
   if (lcm_) lcm_->publish(batch);
   ++batches_;
-  if (batch.full) grid_poses_.clear();
-  for (std::size_t i = 0; i < batch.stamps.size() && i < batch.T_wc.size(); ++i) grid_poses_[batch.stamps[i]] = batch.T_wc[i];
   if (batch.full) {
     ++full_batches_;
     keyframe_poses_.clear();
+    grid_poses_.clear();
     for (const auto& p : batch.pairs) keyframe_poses_.push_back(p.pose);
   } else {
     keyframe_poses_.push_back(batch.pairs.front().pose);
     last_scan_ = batch.pairs.front().scan;
   }
+  for (std::size_t i = 0; i < batch.stamps.size() && i < batch.T_wc.size(); ++i) grid_poses_[batch.stamps[i]] = batch.T_wc[i];
 }
 
 void SlamOgmOutput::write_snapshot(const std::string& name) const {
