@@ -48,7 +48,7 @@ void KeyFrame::erase_connection(KeyFrame* other) {
 }
 
 void KeyFrame::update_connections(int min_weight) {
-  std::map<KeyFrame*, int> counts;
+  KeyFrameMap<int> counts;
   for (const auto& p : points) {
     if (!p || p->bad) continue;
     for (const auto& [kf, idx] : p->observations)
@@ -57,7 +57,7 @@ void KeyFrame::update_connections(int min_weight) {
   if (counts.empty()) return;
   KeyFrame* best = nullptr;
   int best_w = 0;
-  std::map<KeyFrame*, int> kept;
+  KeyFrameMap<int> kept;
   for (const auto& [kf, w] : counts) {
     if (w > best_w || (w == best_w && best && kf->id < best->id)) {
       best = kf;

@@ -15,6 +15,7 @@
 
 #include "features/bow_vector.hpp"
 #include "slam/frame.hpp"
+#include "slam/id_order.hpp"
 
 namespace builtscene::slam {
 
@@ -46,7 +47,7 @@ class KeyFrame : public std::enable_shared_from_this<KeyFrame> {
   std::vector<std::shared_ptr<MapPoint>> good_points() const;
 
   // Covisibility graph.
-  std::map<KeyFrame*, int> connections;
+  KeyFrameMap<int> connections;
   std::vector<KeyFrame*> ordered_connections;  // by weight, heaviest first
   void update_connections(int min_weight = 15);
   std::vector<KeyFrame*> best_covisibles(std::size_t n) const;
@@ -55,7 +56,7 @@ class KeyFrame : public std::enable_shared_from_this<KeyFrame> {
 
   // Spanning tree.
   std::shared_ptr<KeyFrame> parent;
-  std::set<KeyFrame*> children;
+  KeyFrameSet children;
   bool has_parent_link = false;  // set once the keyframe joined the tree
   SE3 T_cp;                      // pose relative to parent, frozen when this keyframe turns bad
 
@@ -66,7 +67,7 @@ class KeyFrame : public std::enable_shared_from_this<KeyFrame> {
 
   // Loop edges of the essential graph (both ends hold the edge). Keyframes with a loop edge
   // are kept (`keep`), so these raw pointers never dangle.
-  std::set<KeyFrame*> loop_edges;
+  KeyFrameSet loop_edges;
 
   bool bad = false;
   bool keep = false;  // protected from culling (the first keyframe, both ends of every loop)

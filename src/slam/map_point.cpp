@@ -11,6 +11,10 @@ namespace builtscene::slam {
 MapPoint::MapPoint(long id_, const Eigen::Vector3d& p, KeyFrame* ref, long created)
     : id(id_), position(p), reference(ref), created_by_kf(created) {}
 
+bool MapPoint::observed_by(const KeyFrame* kf) const {
+  return observations.count(const_cast<KeyFrame*>(kf)) > 0;
+}
+
 void MapPoint::add_observation(KeyFrame* kf, int index) { observations[kf] = index; }
 
 void MapPoint::erase_observation(KeyFrame* kf, Map& map) {

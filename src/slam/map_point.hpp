@@ -14,6 +14,7 @@
 
 #include "core/se3.hpp"
 #include "features/orb_extractor.hpp"
+#include "slam/id_order.hpp"
 
 namespace builtscene::slam {
 
@@ -29,7 +30,7 @@ class MapPoint : public std::enable_shared_from_this<MapPoint> {
   Eigen::Vector3d normal = Eigen::Vector3d::Zero();  // mean unit viewing direction (towards the point)
   cv::Mat descriptor;                                // one row
   float min_distance = 0, max_distance = 0;          // scale-invariance range (metres)
-  std::map<KeyFrame*, int> observations;             // keyframe -> keypoint index
+  KeyFrameMap<int> observations;                     // keyframe -> keypoint index
   KeyFrame* reference = nullptr;
   long created_by_kf = 0;
   // Tracking statistics: predicted visible in a frame / actually matched there.
@@ -41,7 +42,7 @@ class MapPoint : public std::enable_shared_from_this<MapPoint> {
 
   float found_ratio() const { return static_cast<float>(found) / static_cast<float>(std::max(visible, 1)); }
   int observation_count() const { return static_cast<int>(observations.size()); }
-  bool observed_by(const KeyFrame* kf) const { return observations.count(const_cast<KeyFrame*>(kf)) > 0; }
+  bool observed_by(const KeyFrame* kf) const;
 
   void add_observation(KeyFrame* kf, int index);
   // Removes kf's observation; the point turns bad when fewer than two keyframes remain.

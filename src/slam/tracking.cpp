@@ -317,7 +317,7 @@ bool Tracker::recover_near_reference() {
 void Tracker::update_local_map() {
   // Local keyframes: those sharing points with the frame, plus their best neighbours,
   // children and parents (ORB-SLAM's UpdateLocalKeyFrames).
-  std::unordered_map<KeyFrame*, int> counter;
+  KeyFrameMap<int> counter;  // by id: the local map's order must not depend on addresses
   for (std::size_t i = 0; i < current_.points.size(); ++i) {
     const auto& p = current_.points[i];
     if (!p) continue;
