@@ -33,6 +33,11 @@ struct RgbdCameraSettings {
   double bf = 40.0;                // baseline (m) times fx: the virtual stereo of RGB-D
   double th_depth = 40.0;          // close/far threshold in baselines (ORB-SLAM ThDepth)
   double depth_map_factor = 5000;  // depth PNG value per metre
+  // Standard deviation (pixels) of the disparity bf / depth that a keypoint's depth reading
+  // implies: the depth residual of the optimizers is weighted by it, apart from the keypoint's
+  // pixel noise. 0 = ORB-SLAM's virtual right coordinate with the keypoint's pyramid sigma.
+  // [DisparitySigma]; see docs/slam.md, "Depth weight".
+  double disparity_sigma = 0.2;
   bool rgb_order = true;           // Camera.RGB: 1 = images are RGB, 0 = BGR
 
   double close_depth() const { return th_depth * bf / camera.fx; }

@@ -8,6 +8,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "core/errors.hpp"
+#include "core/image_noise.hpp"
 #include "core/settings_file.hpp"
 #include "features/keypoint_distribution.hpp"
 #include "features/orb_pattern.hpp"
@@ -30,6 +31,7 @@ OrbExtractorOptions OrbExtractorOptions::from_settings(const SettingsFile& s) {
   o.n_levels = s.get_int("ORBextractor.nLevels", o.n_levels);
   o.ini_th_fast = s.get_int("ORBextractor.iniThFAST", o.ini_th_fast);
   o.min_th_fast = s.get_int("ORBextractor.minThFAST", o.min_th_fast);
+  o.noise_factor = s.get_double("ORBextractor.noiseFactor", o.noise_factor);
   try {
     o.validate();
   } catch (const InputError& e) {
@@ -44,6 +46,7 @@ void OrbExtractorOptions::validate() const {
   if (n_levels < 1 || n_levels > 20) throw InputError("ORBextractor.nLevels must be in [1, 20]");
   if (ini_th_fast < 1 || ini_th_fast > 255) throw InputError("ORBextractor.iniThFAST must be in [1, 255]");
   if (min_th_fast < 1 || min_th_fast > ini_th_fast) throw InputError("ORBextractor.minThFAST must be in [1, iniThFAST]");
+  if (!(noise_factor >= 0 && noise_factor <= 100)) throw InputError("ORBextractor.noiseFactor must be in [0, 100]");
 }
 
 ScalePyramid ScalePyramid::make(float scale_factor, int n_levels) {
@@ -129,7 +132,7 @@ std::vector<cv::KeyPoint> OrbExtractor::detect_level(int level) const {
     has_strong[static_cast<std::size_t>(cy * cells_x + cx)] = 1;
     kept.push_back(k);
   }
-  if (options_.min_th_fast < options_.ini_th_fast) {
+  if (min_th_fast_now_ < options_.ini_th_fast) {
     // Adjacent weak cells of a row are scanned in one call: a FAST call has a fixed cost
     // (threshold table, row buffers) that dominated when every 32-pixel cell paid it.
     std::vector<cv::KeyPoint> weak;
@@ -150,7 +153,7 @@ std::vector<cv::KeyPoint> OrbExtractor::detect_level(int level) const {
         cx = run_end;
         const cv::Rect roi(x0r - 3, cell_y0 - 3, x1r - x0r + 6, cell_y1 - cell_y0 + 6);
         weak.clear();
-        cv::FAST(img(roi), weak, options_.min_th_fast, true, cv::FastFeatureDetector::TYPE_9_16);
+        cv::FAST(img(roi), weak, min_th_fast_now_, true, cv::FastFeatureDetector::TYPE_9_16);
         for (auto& k : weak) {
           k.pt.x += static_cast<float>(roi.x);
           k.pt.y += static_cast<float>(roi.y);
@@ -220,6 +223,13 @@ void OrbExtractor::extract(const cv::Mat& gray_in, std::vector<cv::KeyPoint>& ke
   if (gray_in.empty()) return;
   CV_Assert(gray_in.type() == CV_8UC1);
   build_pyramid(gray_in);
+  noise_sigma_ = 0;
+  min_th_fast_now_ = options_.min_th_fast;
+  if (options_.noise_factor > 0) {
+    noise_sigma_ = estimate_image_noise_sigma(gray_in);
+    const int from_noise = static_cast<int>(std::ceil(options_.noise_factor * noise_sigma_));
+    min_th_fast_now_ = std::clamp(from_noise, options_.min_th_fast, options_.ini_th_fast);
+  }
 
   // Levels are independent once the pyramid exists: detection, orientation and description
   // run per level, in parallel when allowed; the result does not depend on the thread count.

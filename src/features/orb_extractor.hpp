@@ -17,12 +17,21 @@ struct OrbExtractorOptions {
   int n_levels = 8;
   int ini_th_fast = 20;
   int min_th_fast = 7;
+  // The fallback threshold is raised to noise_factor times the image's noise sigma
+  // (core/image_noise.hpp) when that is higher, never above ini_th_fast; 0 turns it off.
+  // Why: in a low-contrast cell, FAST at 7 grey levels fires on sensor noise once sigma is
+  // above ~1.5; those corners have random descriptors, yet they take the cell's share of the
+  // features and, with depth, become map points that match noise in the next frame. On the
+  // generated corridor (sigma 2.5) they made a keyframe of every second frame and shrank the
+  // trajectory by 10-16 % (docs/slam.md, "Image noise"). 6 sigma: 7scenes (sigma ~0.5)
+  // keeps 7; generated worlds (sigma 2-2.5) get 12-15.
+  double noise_factor = 6.0;
   // Process pyramid levels on OpenCV's thread pool (same output either way). Off by default:
   // on the shared 2-core machine it did not lower the median time (load 10, not conclusive),
   // and the local-mapping thread needs the second core.
   bool parallel_levels = false;
 
-  // ORBextractor.nFeatures, .scaleFactor, .nLevels, .iniThFAST, .minThFAST when present;
+  // ORBextractor.nFeatures, .scaleFactor, .nLevels, .iniThFAST, .minThFAST, .noiseFactor when present;
   // InputError naming the key for values out of range.
   static OrbExtractorOptions from_settings(const SettingsFile& settings);
   void validate() const;  // throws InputError
@@ -61,6 +70,10 @@ class OrbExtractor {
   const ScalePyramid& pyramid() const { return pyramid_; }
   // The image pyramid of the last extract() call (level 0 = the input).
   const std::vector<cv::Mat>& levels() const { return levels_; }
+  // The last extract() call's noise estimate (grey levels) and the fallback FAST threshold
+  // it led to.
+  double last_noise_sigma() const { return noise_sigma_; }
+  int last_min_th_fast() const { return min_th_fast_now_; }
 
  private:
   OrbExtractorOptions options_;
@@ -68,6 +81,8 @@ class OrbExtractor {
   std::vector<int> features_per_level_;
   std::vector<int> umax_;  // half-width of the circular patch per row offset
   std::vector<cv::Mat> levels_;
+  double noise_sigma_ = 0;
+  int min_th_fast_now_ = 0;
 
   void build_pyramid(const cv::Mat& gray);
   std::vector<cv::KeyPoint> detect_level(int level) const;

@@ -15,6 +15,7 @@ std::shared_ptr<const FrameContext> FrameContext::make(const RgbdCameraSettings&
   c->camera = s.camera;
   c->bf = s.bf;
   c->th_depth = s.close_depth();
+  c->disparity_sigma = s.disparity_sigma;
   c->pyramid = pyramid;
   c->metric = metric;
   const auto& cam = s.camera;

@@ -28,6 +28,7 @@ struct FrameContext {
   PinholeCamera camera;
   double bf = 40.0;        // baseline times fx (pixels * metres)
   double th_depth = 3.0;   // metres: closer keypoints are "close" (reliable depth)
+  double disparity_sigma = 0;  // pixels; 0 = ORB-SLAM's u_right residual (see RgbdCameraSettings)
   ScalePyramid pyramid;
   DescriptorMetric metric = DescriptorMetric::orb();
   // Undistorted image bounds (the image corners undistorted), for projection checks.

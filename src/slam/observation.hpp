@@ -8,6 +8,12 @@ namespace builtscene::slam {
 
 struct Intrinsics {
   double fx = 0, fy = 0, cx = 0, cy = 0, bf = 0;
+  // > 0: the third residual of a stereo observation is the disparity bf / z against the
+  // reading's (u - u_right), weighted by 1 / disparity_sigma^2 whatever the keypoint's level:
+  // a depth reading's error does not grow with the pyramid level the corner was found on, and
+  // it is independent of the corner's pixel error (which the u_right form counts twice).
+  // 0: ORB-SLAM's u_right residual with the level's sigma.
+  double disparity_sigma = 0;
 };
 
 struct Observation {

@@ -14,6 +14,10 @@ double reprojection_chi2(const Intrinsics& K, const Observation& o, const Eigen:
   const double inv_z = 1.0 / p_c.z();
   const double u = K.fx * p_c.x() * inv_z + K.cx, v = K.fy * p_c.y() * inv_z + K.cy;
   double e = (u - o.uv.x()) * (u - o.uv.x()) + (v - o.uv.y()) * (v - o.uv.y());
+  if (o.stereo() && K.disparity_sigma > 0) {
+    const double ed = (K.bf * inv_z - (o.uv.x() - o.u_right)) / K.disparity_sigma;
+    return e * o.inv_sigma2 + ed * ed;
+  }
   if (o.stereo()) {
     const double ur = u - K.bf * inv_z;
     e += (ur - o.u_right) * (ur - o.u_right);
@@ -22,7 +26,7 @@ double reprojection_chi2(const Intrinsics& K, const Observation& o, const Eigen:
 }
 
 Intrinsics intrinsics_of(const FrameContext& ctx) {
-  return {ctx.camera.fx, ctx.camera.fy, ctx.camera.cx, ctx.camera.cy, ctx.bf};
+  return {ctx.camera.fx, ctx.camera.fy, ctx.camera.cx, ctx.camera.cy, ctx.bf, ctx.disparity_sigma};
 }
 
 PoseOptimizationResult optimize_pose(const SE3& T_cw_initial, const std::vector<Eigen::Vector3d>& points_w,

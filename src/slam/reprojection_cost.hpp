@@ -23,7 +23,12 @@ inline bool project_residuals(const T* pose, const T* pw, const Intrinsics& K, c
   const T v = T(K.fy) * pc[1] * inv_z + T(K.cy);
   r[0] = T(sqrt_info) * (u - T(o.uv.x()));
   r[1] = T(sqrt_info) * (v - T(o.uv.y()));
-  if constexpr (kResiduals == 3) r[2] = T(sqrt_info) * (u - T(K.bf) * inv_z - T(o.u_right));
+  if constexpr (kResiduals == 3) {
+    if (K.disparity_sigma > 0)
+      r[2] = T(1.0 / K.disparity_sigma) * (T(K.bf) * inv_z - T(o.uv.x() - o.u_right));
+    else
+      r[2] = T(sqrt_info) * (u - T(K.bf) * inv_z - T(o.u_right));
+  }
   return true;
 }
 
