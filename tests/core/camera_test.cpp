@@ -106,6 +106,14 @@ TEST(CameraSettings, BadFilesNameFileAndField) {
     EXPECT_NE(std::string(e.what()).find("Camera.fy"), std::string::npos);
   }
   EXPECT_THROW(load_camera_settings(write_temp("bs_cam_bad.yaml", "Camera.fx: [1, 2\n")), InputError);
+  const auto sigma = write_temp("bs_cam_sigma.yaml", "Camera.fx: 500\nCamera.fy: 500\nCamera.cx: 1\nCamera.cy: 2\nDisparitySigma: -0.1\n");
+  try {
+    load_camera_settings(sigma);
+    FAIL() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("bs_cam_sigma.yaml"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("DisparitySigma"), std::string::npos) << e.what();
+  }
   EXPECT_THROW(load_camera_settings("/nonexistent/camera.yaml"), InputError);
 }
 

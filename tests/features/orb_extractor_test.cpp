@@ -141,6 +141,37 @@ TEST(OrbExtractor, BlankAndTinyImagesGiveNothing) {
   EXPECT_TRUE(k.empty());
 }
 
+// A plain wall under sensor noise has no corner at all, so every keypoint found on it is
+// noise. The noise-adaptive fallback threshold must leave (almost) none there, yet keep the
+// real corners of a textured image under the same noise.
+TEST(OrbExtractor, NoiseAdaptiveThresholdFindsNoCornersOnAPlainNoisyWall) {
+  cv::Mat noise(480, 640, CV_32F);
+  cv::RNG rng(5);
+  rng.fill(noise, cv::RNG::NORMAL, 0.0, 2.5);  // the generated worlds' level (docs/slam.md)
+  cv::Mat wall;
+  cv::Mat(cv::Mat(480, 640, CV_32F, cv::Scalar(140)) + noise).convertTo(wall, CV_8U);
+  OrbExtractorOptions fixed;
+  fixed.noise_factor = 0;  // ORB-SLAM's fixed fallback of 7 grey levels
+  OrbExtractor plain(fixed), adaptive;
+  std::vector<cv::KeyPoint> k_fixed, k_adaptive;
+  cv::Mat d;
+  plain.extract(wall, k_fixed, d);
+  adaptive.extract(wall, k_adaptive, d);
+  std::printf("plain noisy wall: %zu keypoints at threshold 7, %zu at %d (sigma %.2f)\n", k_fixed.size(),
+              k_adaptive.size(), adaptive.last_min_th_fast(), adaptive.last_noise_sigma());
+  EXPECT_NEAR(adaptive.last_noise_sigma(), 2.5, 0.3);
+  EXPECT_GT(k_fixed.size(), 50u);  // the failure mode: noise corners where nothing is
+  EXPECT_LE(k_adaptive.size(), 2u);
+
+  cv::Mat textured;
+  cv::Mat tex32;
+  test::textured_image(640, 480, 3).convertTo(tex32, CV_32F);
+  cv::Mat(tex32 + noise).convertTo(textured, CV_8U);
+  std::vector<cv::KeyPoint> k_tex;
+  adaptive.extract(textured, k_tex, d);
+  EXPECT_GT(k_tex.size(), 900u);  // the real corners pass the strong threshold as before
+}
+
 TEST(OrbExtractor, SpreadsBetterThanOpenCvOnRealImage) {
   const auto path = std::filesystem::path(BUILTSCENE_SOURCE_DIR) / "../shared/data/7scenes-kitchen/rgb";
   if (!std::filesystem::exists(path)) GTEST_SKIP() << "real data not found at " << path;

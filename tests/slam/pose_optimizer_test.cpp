@@ -10,6 +10,7 @@ namespace {
 struct Case {
   bool stereo;
   const char* name;
+  double disparity_sigma = 0;  // > 0: depth readings with this disparity noise, weighted by it
 };
 
 class PoseOptimizerRecovers : public ::testing::TestWithParam<Case> {};
@@ -18,7 +19,9 @@ TEST_P(PoseOptimizerRecovers, KnownPoseWith30PercentOutliers) {
   std::mt19937 rng(42);
   std::uniform_real_distribution<double> ux(-2.0, 2.0), uz(1.0, 6.0), upx(0, 640), upy(0, 480);
   std::normal_distribution<double> noise(0, 1.0);
-  const auto K = test::kinect();
+  auto K = test::kinect();
+  K.disparity_sigma = GetParam().disparity_sigma;
+  std::normal_distribution<double> disparity_noise(0, std::max(GetParam().disparity_sigma, 1e-9));
   const SE3 truth(so3_exp(Eigen::Vector3d(0.1, -0.2, 0.05)), Eigen::Vector3d(0.3, -0.1, 0.5));
   std::vector<Eigen::Vector3d> pts;
   std::vector<Observation> obs;
@@ -36,7 +39,10 @@ TEST_P(PoseOptimizerRecovers, KnownPoseWith30PercentOutliers) {
     } else {
       o.uv = uv + Eigen::Vector2d(noise(rng), noise(rng));
     }
-    if (GetParam().stereo) o.u_right = (outlier ? o.uv.x() - K.bf / uz(rng) : uv.x() - K.bf / pc.z() + noise(rng));
+    if (GetParam().stereo && K.disparity_sigma > 0)  // the depth reading's own error, apart from the pixel's
+      o.u_right = o.uv.x() - (outlier ? K.bf / uz(rng) : K.bf / pc.z() + disparity_noise(rng));
+    else if (GetParam().stereo)
+      o.u_right = (outlier ? o.uv.x() - K.bf / uz(rng) : uv.x() - K.bf / pc.z() + noise(rng));
     if (GetParam().stereo && o.u_right < 0) o.u_right = 0;
     o.inv_sigma2 = 1.0;
     obs.push_back(o);
@@ -60,8 +66,33 @@ TEST_P(PoseOptimizerRecovers, KnownPoseWith30PercentOutliers) {
 }
 
 INSTANTIATE_TEST_SUITE_P(MonoAndStereo, PoseOptimizerRecovers,
-                         ::testing::Values(Case{false, "mono"}, Case{true, "stereo"}),
+                         ::testing::Values(Case{false, "mono"}, Case{true, "stereo"},
+                                           Case{true, "disparity", 0.2}),
                          [](const auto& info) { return std::string(info.param.name); });
+
+// The disparity form's chi-square, closed form: a point seen at its exact pixel whose depth
+// reading implies a disparity off by delta costs (delta / sigma_d)^2, whatever the level.
+TEST(PoseOptimizer, DisparityResidualIsWeightedByItsOwnSigma) {
+  auto K = test::kinect();
+  K.disparity_sigma = 0.25;
+  const Eigen::Vector3d pc(0.4, -0.2, 2.5);
+  const Eigen::Vector2d uv = test::project(K, pc);
+  for (const double inv_sigma2 : {1.0, 1.0 / (1.2 * 1.2 * 1.2 * 1.2)}) {
+    for (const double delta : {0.0, 0.1, 0.5}) {
+      Observation o;
+      o.uv = uv;
+      o.inv_sigma2 = inv_sigma2;
+      o.u_right = uv.x() - (K.bf / pc.z() + delta);
+      EXPECT_NEAR(reprojection_chi2(K, o, pc), (delta / 0.25) * (delta / 0.25), 1e-9);
+    }
+  }
+  // A pixel error still counts with the level's information, and not twice.
+  Observation o;
+  o.uv = uv + Eigen::Vector2d(1.5, 0);
+  o.inv_sigma2 = 0.5;
+  o.u_right = o.uv.x() - K.bf / pc.z();
+  EXPECT_NEAR(reprojection_chi2(K, o, pc), 1.5 * 1.5 * 0.5, 1e-9);
+}
 
 TEST(PoseOptimizer, TooFewMatchesLeavesPoseUntouched) {
   const SE3 start(so3_exp(Eigen::Vector3d(0.1, 0, 0)), Eigen::Vector3d(1, 2, 3));
