@@ -191,6 +191,7 @@ nlohmann::json run_slam(const SlamOptions& opt) {
         {"max_queue", stats.max_queue}}},
       {"relocalizations", {{"count", relocalized.size()}, {"frames", relocalized}}},
       {"depth_odometry_frames", system.depth_odometry_frames()},
+      {"depth_odometry_prior_frames", system.depth_odometry_prior_frames()},
       {"loops", {{"count", loop_frames.size()}, {"frames", loop_frames}, {"events", loop_list}}},
       {"loop_closing",
        {{"enabled", system.loop_closing_enabled()},

@@ -24,7 +24,8 @@ class DepthOdometry {
   DepthOdometry& operator=(const DepthOdometry&) = delete;
 
   // T_cur_prev (a point in the previous camera frame, expressed in the current one), starting
-  // from `guess`; nothing when the alignment fails, moves implausibly far for one frame, or
+  // from `guess` (OpenCV's RgbdICPOdometry; where it refuses a degenerate scene, such as one
+  // plain wall, point-to-plane ICP with `guess` as a prior); nothing when the alignment fails, moves implausibly far for one frame, or
   // does not explain the current depth image (see depth_agreement): ICP always returns some
   // small motion, also between two unrelated views (a kidnapped camera), and a wrong pose
   // taken as a bridge would be built into the map.
@@ -40,10 +41,17 @@ class DepthOdometry {
 
   // Alignments whose depth_agreement is below this are refused.
   static constexpr double kMinDepthAgreement = 0.6;
+  // So are prior-weighted alignments this far (metres) from the prediction (OpenCV's own
+  // limit on its results is 0.15 m of motion).
+  static constexpr double kMaxTranslationFromGuess = 0.15;
+
+  // How many accepted alignments came from the prior-weighted ICP (OpenCV refused the system).
+  long prior_alignments() const { return prior_alignments_; }
 
  private:
   double fx_, fy_, cx_, cy_;
   cv::Ptr<cv::rgbd::RgbdICPOdometry> odometry_;
+  mutable long prior_alignments_ = 0;
 };
 
 }  // namespace builtscene::slam

@@ -127,6 +127,7 @@ class System {
   std::vector<long> relocalized_frames() const { return tracker_->relocalized_frames(); }
   // Frames whose pose came from RGB-D odometry because features could not hold it.
   long depth_odometry_frames() const { return tracker_->depth_odometry_frames(); }
+  long depth_odometry_prior_frames() const { return tracker_->depth_odometry_prior_frames(); }
 
   // Loop closures. A subscriber is called for every LoopEvent (a loop corrected, then its
   // global BA merged) in the loop-closing or global-BA thread (the caller's thread in inline

@@ -8,6 +8,7 @@
 // Ownership: the Tracker owns the current and last Frame and its per-frame records; it takes
 // the map lock for the whole of a frame's matching and optimization (see map.hpp).
 #include <functional>
+#include <deque>
 #include <memory>
 #include <vector>
 
@@ -104,6 +105,8 @@ class Tracker {
   void enable_depth_odometry(bool on) { depth_odometry_on_ = on; }
   // Frames whose pose came from depth odometry because features alone could not hold it.
   long depth_odometry_frames() const { return depth_odometry_frames_; }
+  // Of those, the frames whose depth did not fix every direction (icp_with_motion_prior.hpp).
+  long depth_odometry_prior_frames() const;
   // Ids of the frames where tracking resumed through relocalization.
   const std::vector<long>& relocalized_frames() const { return relocalized_frames_; }
 
@@ -119,6 +122,8 @@ class Tracker {
   bool has_last_ = false;
   bool has_velocity_ = false;
   SE3 velocity_;  // T_cur_last
+  std::deque<double> recent_speeds_;  // metres per frame of the last frames tracked by features
+  SE3 odometry_prediction() const;
   std::shared_ptr<KeyFrame> reference_;
   std::vector<std::shared_ptr<KeyFrame>> local_keyframes_;
   std::vector<std::shared_ptr<MapPoint>> local_points_;
