@@ -24,7 +24,11 @@ class KeyFrameSink;
 class Relocalizer;
 
 struct TrackingOptions {
-  int min_init_points = 500;       // keypoints needed to start a map (ORB-SLAM2)
+  // Keypoints needed to start a map. ORB-SLAM2 asks for 500 of its 1000, but there the budget
+  // fills with sensor-noise corners on plain surfaces; with the noise-adaptive FAST threshold
+  // (orb_extractor.hpp) a real view of the generated lab room gives 440-480 true corners,
+  // ~90 % with depth, and waited 15 frames for 500.
+  int min_init_points = 300;
   int min_init_depth_points = 100; // ... of which with depth
   int max_frames_between_kf = 30;  // ORB-SLAM: the camera fps
   int min_frames_between_kf = 0;
