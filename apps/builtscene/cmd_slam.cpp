@@ -199,6 +199,7 @@ nlohmann::json run_slam(const SlamOptions& opt) {
         {"consistent_candidates", lc.consistent_candidates},
         {"rejected", lc.rejected},
         {"rejected_anchored", lc.rejected_anchored},
+        {"rejected_implausible", lc.rejected_implausible},
         {"points_fused", lc.points_fused},
         {"global_ba_runs", lc.global_ba_runs},
         {"global_ba_aborted", lc.global_ba_aborted},

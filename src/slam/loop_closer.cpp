@@ -217,6 +217,28 @@ std::unique_ptr<LoopCloser::LoopMatch> LoopCloser::verify(KeyFrame& kf, KeyFrame
       return nullptr;
     }
   }
+  {
+    double path_m = 0;
+    const KeyFrame* prev = nullptr;
+    for (const auto& k : map_.keyframes()) {  // by id
+      if (k->id < cand.id || k->id > kf.id) continue;
+      if (prev) path_m += (k->camera_center() - prev->camera_center()).norm();
+      prev = k.get();
+    }
+    const SE3 correction = frame.T_cw.inverse() * T1;
+    const double angle_deg = Eigen::AngleAxisd(correction.rotation()).angle() * 180.0 / M_PI;
+    const double moved = (frame.camera_center() - kf.camera_center()).norm();
+    const double max_m = opt_.max_correction_base_m + opt_.max_correction_per_metre * path_m;
+    const double max_deg = opt_.max_correction_base_deg + opt_.max_correction_deg_per_metre * path_m;
+    if (moved > max_m || angle_deg > max_deg) {
+      spdlog::info("loop candidate {} for keyframe {} (frame {}) rejected: {} inliers, but a correction of {:.2f} m / "
+                   "{:.1f} deg is more than {:.1f} m of path could drift ({:.2f} m / {:.1f} deg)",
+                   cand.id, kf.id, kf.frame_id, good, moved, angle_deg, path_m, max_m, max_deg);
+      std::lock_guard s(stats_mutex_);
+      ++stats_.rejected_implausible;
+      return nullptr;
+    }
+  }
   auto m = std::make_unique<LoopMatch>();
   m->candidate = cand.shared_from_this();
   m->T_cw = frame.T_cw;
