@@ -242,10 +242,13 @@ TEST(Mediator, AStalledModelIsReportedByName) {
                                           "]\nsubscribe:\n  - {channel: X, type: t.x_t}\npublish:\n  - {channel: Y, type: t.x_t}\n");
   couple_test::write(d / "end.yaml", "name: end\n" + head + "command: [python3, " + (d / "end.py").string() +
                                          "]\nsubscribe:\n  - {channel: Y, type: t.x_t}\npublish:\n  - {channel: Z, type: t.x_t}\n");
-  couple_test::write(d / "scenario.yaml", "name: p\ntransport: mediator\ntimeout: 2\nmodels: [src.yaml, sink.yaml, end.yaml]\n");
+  // The stall timeout counts from the launch: 2 s was shorter than three python3 start-ups
+  // (through a pyenv shim) on a loaded 2-core machine, and the report then came at step 0,
+  // before 'sink' had blocked (one clean-clone CI run, 2026-12-01).
+  couple_test::write(d / "scenario.yaml", "name: p\ntransport: mediator\ntimeout: 5\nmodels: [src.yaml, sink.yaml, end.yaml]\n");
   const auto r = couple_test::run(in_tmp(d, kBin + " couple launch " + (d / "scenario.yaml").string()));
   EXPECT_EQ(r.code, 1) << r.out;
-  EXPECT_NE(r.out.find("no model advanced for 2 s"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("no model advanced for 5 s"), std::string::npos) << r.out;
   // 'sink' is stuck computing step 5; 'end' waits for a step of it (5, or the one of
   // its last status report: a wrapper reports every 32 steps or every 20 ms blocked).
   EXPECT_TRUE(std::regex_search(
