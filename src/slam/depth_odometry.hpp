@@ -1,9 +1,10 @@
 #pragma once
 // Frame-to-frame RGB-D odometry for the moments when features cannot hold the pose: a robot
 // turning in front of a plain wall sees a handful of keypoints, but its depth image still shows
-// the wall and the floor. OpenCV's RgbdICPOdometry (contrib `rgbd` module: point-to-plane ICP
-// plus a photometric term, coarse to fine) aligns the last frame with the current one. It is
-// used only as a bridge by the tracker (see tracking.cpp): the ORB pipeline stays primary.
+// the wall and the floor. Point-to-plane ICP with the motion prediction as a weak prior
+// (icp_with_motion_prior.hpp) aligns the last frame with the current one, OpenCV's
+// RgbdICPOdometry (contrib `rgbd` module) where too few pixels associate. It is used only as a
+// bridge by the tracker (see tracking.cpp): the ORB pipeline stays primary.
 #include <optional>
 
 #include <opencv2/core.hpp>
@@ -45,7 +46,7 @@ class DepthOdometry {
   // limit on its results is 0.15 m of motion).
   static constexpr double kMaxTranslationFromGuess = 0.15;
 
-  // How many accepted alignments came from the prior-weighted ICP (OpenCV refused the system).
+  // How many accepted alignments came from the prior-weighted ICP (the rest from OpenCV's).
   long prior_alignments() const { return prior_alignments_; }
 
  private:

@@ -109,7 +109,8 @@ class Tracker {
   void enable_depth_odometry(bool on) { depth_odometry_on_ = on; }
   // Frames whose pose came from depth odometry because features alone could not hold it.
   long depth_odometry_frames() const { return depth_odometry_frames_; }
-  // Of those, the frames whose depth did not fix every direction (icp_with_motion_prior.hpp).
+  // Of those, the frames aligned by the prior-weighted ICP (icp_with_motion_prior.hpp; the
+  // rest by OpenCV's RgbdICPOdometry, its fallback).
   long depth_odometry_prior_frames() const;
   // Ids of the frames where tracking resumed through relocalization.
   const std::vector<long>& relocalized_frames() const { return relocalized_frames_; }
