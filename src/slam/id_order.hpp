@@ -6,8 +6,6 @@
 // adjustment, database candidates) changed too and the same input gave different
 // trajectories. Ids are assigned in processing order, so every container of keyframes or
 // points that is iterated uses these instead.
-#include <cstddef>
-#include <functional>
 #include <map>
 #include <set>
 
@@ -22,15 +20,6 @@ struct ById {
   template <class T>
   bool operator()(const T* a, const T* b) const {
     return a->id < b->id;
-  }
-};
-
-// Hash for unordered containers: with the same ids inserted in the same order, iteration
-// order is the same in every run.
-struct HashById {
-  template <class T>
-  std::size_t operator()(const T* p) const {
-    return std::hash<long>()(p->id);
   }
 };
 

@@ -26,12 +26,9 @@ class AbortCallback : public ceres::IterationCallback {
 double pixel_sq_error(const Intrinsics& K, const Observation& o, const Eigen::Vector3d& pc) {
   // Error in pixels (without the level information weight), for reporting; the disparity
   // residual of the depth-weighted form is left out (it is not a pixel error of the corner).
-  if (K.disparity_sigma > 0) {
-    Observation mono = o;
-    mono.u_right = -1;
-    return reprojection_chi2(K, mono, pc) / o.inv_sigma2;
-  }
-  return reprojection_chi2(K, o, pc) / o.inv_sigma2;
+  Observation pixel = o;
+  if (K.disparity_sigma > 0) pixel.u_right = -1;
+  return reprojection_chi2(K, pixel, pc) / o.inv_sigma2;
 }
 
 }  // namespace

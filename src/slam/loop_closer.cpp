@@ -202,12 +202,13 @@ std::unique_ptr<LoopCloser::LoopMatch> LoopCloser::verify(KeyFrame& kf, KeyFrame
   optimize_frame_pose(frame);
   good = frame.keep_inlier_matches();
   if (good < opt_.min_inliers) return nullptr;
+  // How far the loop would move the keyframe; both rules below judge it.
+  const SE3 correction = frame.T_cw.inverse() * T1;
+  const double angle_deg = Eigen::AngleAxisd(correction.rotation()).angle() * 180.0 / M_PI;
+  const double moved = (frame.camera_center() - kf.camera_center()).norm();
   bool anchored = false;
   for (const auto& [n, w] : kf.connections) anchored |= !n->bad && n->id < kf.id - opt_.min_keyframe_gap;
   if (anchored) {
-    const SE3 correction = frame.T_cw.inverse() * T1;
-    const double angle_deg = Eigen::AngleAxisd(correction.rotation()).angle() * 180.0 / M_PI;
-    const double moved = (frame.camera_center() - kf.camera_center()).norm();
     if (moved > opt_.max_anchored_correction_m || angle_deg > opt_.max_anchored_correction_deg) {
       spdlog::info("loop candidate {} for keyframe {} (frame {}) rejected: {} inliers, but it would move a keyframe "
                    "tied to older ones by {:.2f} m / {:.1f} deg",
@@ -225,9 +226,6 @@ std::unique_ptr<LoopCloser::LoopMatch> LoopCloser::verify(KeyFrame& kf, KeyFrame
       if (prev) path_m += (k->camera_center() - prev->camera_center()).norm();
       prev = k.get();
     }
-    const SE3 correction = frame.T_cw.inverse() * T1;
-    const double angle_deg = Eigen::AngleAxisd(correction.rotation()).angle() * 180.0 / M_PI;
-    const double moved = (frame.camera_center() - kf.camera_center()).norm();
     const double max_m = opt_.max_correction_base_m + opt_.max_correction_per_metre * path_m;
     const double max_deg = opt_.max_correction_base_deg + opt_.max_correction_deg_per_metre * path_m;
     if (moved > max_m || angle_deg > max_deg) {
