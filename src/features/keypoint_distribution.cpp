@@ -1,81 +1,114 @@
 #include "features/keypoint_distribution.hpp"
 
 #include <algorithm>
-#include <queue>
+#include <cmath>
 
 namespace builtscene {
-namespace {
 
-struct Cell {
-  cv::Rect2f box;
-  std::vector<int> members;  // indices into the keypoint vector
-};
+void distribute_quadtree(const std::vector<cv::KeyPoint>& keypoints, const cv::Rect2f& bounds, int wanted,
+                         std::vector<cv::KeyPoint>& out, QuadtreeScratch& scratch) {
+  out.clear();
+  if (wanted <= 0 || keypoints.empty()) return;
+  if (static_cast<int>(keypoints.size()) <= wanted) {
+    out = keypoints;
+    return;
+  }
+  // Every cell owns a range [begin, end) of `members` (keypoint indices, in input order);
+  // splitting a cell partitions its range stably into its four quadrants, so no cell
+  // allocates and a keypoint's order inside its cell is always its input order.
+  auto& cells = scratch.cells;
+  auto& members = scratch.members;
+  auto& tmp = scratch.tmp;
+  auto& heap = scratch.heap;
+  auto& split_away = scratch.split_away;
+  cells.clear();
+  heap.clear();
+  split_away.clear();
+  members.resize(keypoints.size());
+  tmp.resize(keypoints.size());
 
-}  // namespace
-
-std::vector<cv::KeyPoint> distribute_quadtree(const std::vector<cv::KeyPoint>& keypoints, const cv::Rect2f& bounds,
-                                              int wanted) {
-  if (wanted <= 0 || keypoints.empty()) return {};
-  if (static_cast<int>(keypoints.size()) <= wanted) return keypoints;
-
-  std::vector<Cell> cells;
   // Start from square-ish roots so a wide image is not split into thin slices.
   const int roots = std::max(1, static_cast<int>(std::lround(bounds.width / std::max(1.0f, bounds.height))));
   const float root_w = bounds.width / static_cast<float>(roots);
-  for (int r = 0; r < roots; ++r)
-    cells.push_back({cv::Rect2f(bounds.x + root_w * static_cast<float>(r), bounds.y, root_w, bounds.height), {}});
-  for (int i = 0; i < static_cast<int>(keypoints.size()); ++i) {
-    const int r = std::clamp(static_cast<int>((keypoints[i].pt.x - bounds.x) / root_w), 0, roots - 1);
-    cells[static_cast<std::size_t>(r)].members.push_back(i);
+  {
+    auto root_of = [&](int i) {
+      return std::clamp(static_cast<int>((keypoints[static_cast<std::size_t>(i)].pt.x - bounds.x) / root_w), 0, roots - 1);
+    };
+    std::vector<int>& count = scratch.root_count;
+    count.assign(static_cast<std::size_t>(roots) + 1, 0);
+    for (int i = 0; i < static_cast<int>(keypoints.size()); ++i) ++count[static_cast<std::size_t>(root_of(i)) + 1];
+    for (int r = 0; r < roots; ++r) count[static_cast<std::size_t>(r) + 1] += count[static_cast<std::size_t>(r)];
+    std::vector<int>& fill = scratch.root_fill;
+    fill.assign(count.begin(), count.end() - 1);
+    for (int i = 0; i < static_cast<int>(keypoints.size()); ++i) members[static_cast<std::size_t>(fill[static_cast<std::size_t>(root_of(i))]++)] = i;
+    for (int r = 0; r < roots; ++r) {
+      const int b = count[static_cast<std::size_t>(r)], e = count[static_cast<std::size_t>(r) + 1];
+      if (b == e) continue;
+      cells.push_back({cv::Rect2f(bounds.x + root_w * static_cast<float>(r), bounds.y, root_w, bounds.height), b, e});
+    }
   }
-  std::erase_if(cells, [](const Cell& c) { return c.members.empty(); });
 
   // Largest cell first (ties: the more crowded one), i.e. the tree is refined breadth-first,
   // level by level, so a dense cluster cannot keep the budget away from sparse regions.
   auto by_size = [&cells](int a, int b) {
-    const float aa = cells[a].box.area(), ab = cells[b].box.area();
+    const auto& ca = cells[static_cast<std::size_t>(a)];
+    const auto& cb = cells[static_cast<std::size_t>(b)];
+    const float aa = ca.box.area(), ab = cb.box.area();
     if (aa != ab) return aa < ab;
-    return cells[a].members.size() < cells[b].members.size();
+    return ca.size() < cb.size();
   };
-  std::priority_queue<int, std::vector<int>, decltype(by_size)> heap(by_size);
+  auto push = [&](int i) {
+    heap.push_back(i);
+    std::push_heap(heap.begin(), heap.end(), by_size);
+  };
   for (int i = 0; i < static_cast<int>(cells.size()); ++i)
-    if (cells[i].members.size() > 1) heap.push(i);
+    if (cells[static_cast<std::size_t>(i)].size() > 1) push(i);
 
-  std::vector<bool> split_away(cells.size(), false);
+  split_away.assign(cells.size(), 0);
   int live = static_cast<int>(cells.size());
   while (live < wanted && !heap.empty()) {
-    const int idx = heap.top();
-    heap.pop();
-    const float hw = cells[static_cast<std::size_t>(idx)].box.width * 0.5f;
-    const float hh = cells[static_cast<std::size_t>(idx)].box.height * 0.5f;
+    std::pop_heap(heap.begin(), heap.end(), by_size);
+    const int idx = heap.back();
+    heap.pop_back();
+    const QuadtreeScratch::Cell parent = cells[static_cast<std::size_t>(idx)];
+    const float hw = parent.box.width * 0.5f;
+    const float hh = parent.box.height * 0.5f;
     if (hw < 1.0f || hh < 1.0f) continue;  // too small to split: keep as a leaf
-    const Cell parent = std::move(cells[static_cast<std::size_t>(idx)]);  // its slot is retired below
-    Cell child[4];
-    for (int q = 0; q < 4; ++q)
-      child[q].box = cv::Rect2f(parent.box.x + (q % 2) * hw, parent.box.y + static_cast<float>(q / 2) * hh, hw, hh);
-    for (int m : parent.members) {
+    int count[4] = {0, 0, 0, 0};
+    auto quadrant = [&](int m) {
       const auto& p = keypoints[static_cast<std::size_t>(m)].pt;
-      const int q = (p.x >= parent.box.x + hw ? 1 : 0) + (p.y >= parent.box.y + hh ? 2 : 0);
-      child[q].members.push_back(m);
+      return (p.x >= parent.box.x + hw ? 1 : 0) + (p.y >= parent.box.y + hh ? 2 : 0);
+    };
+    for (int j = parent.begin; j < parent.end; ++j) ++count[quadrant(members[static_cast<std::size_t>(j)])];
+    int start[4];
+    start[0] = parent.begin;
+    for (int q = 1; q < 4; ++q) start[q] = start[q - 1] + count[q - 1];
+    int fill[4] = {start[0], start[1], start[2], start[3]};
+    for (int j = parent.begin; j < parent.end; ++j) {
+      const int m = members[static_cast<std::size_t>(j)];
+      tmp[static_cast<std::size_t>(fill[quadrant(m)]++)] = m;
     }
-    split_away[static_cast<std::size_t>(idx)] = true;
+    std::copy(tmp.begin() + parent.begin, tmp.begin() + parent.end, members.begin() + parent.begin);
+    split_away[static_cast<std::size_t>(idx)] = 1;
     --live;
-    for (auto& c : child) {
-      if (c.members.empty()) continue;
-      cells.push_back(std::move(c));
-      split_away.push_back(false);
+    for (int q = 0; q < 4; ++q) {
+      if (count[q] == 0) continue;
+      cells.push_back({cv::Rect2f(parent.box.x + static_cast<float>(q % 2) * hw, parent.box.y + static_cast<float>(q / 2) * hh, hw, hh),
+                       start[q], start[q] + count[q]});
+      split_away.push_back(0);
       ++live;
-      if (cells.back().members.size() > 1) heap.push(static_cast<int>(cells.size()) - 1);
+      if (count[q] > 1) push(static_cast<int>(cells.size()) - 1);
     }
   }
 
-  std::vector<cv::KeyPoint> out;
   out.reserve(static_cast<std::size_t>(live));
   for (std::size_t i = 0; i < cells.size(); ++i) {
     if (split_away[i]) continue;
-    int best = cells[i].members.front();
-    for (int m : cells[i].members)
+    int best = members[static_cast<std::size_t>(cells[i].begin)];
+    for (int j = cells[i].begin; j < cells[i].end; ++j) {
+      const int m = members[static_cast<std::size_t>(j)];
       if (keypoints[static_cast<std::size_t>(m)].response > keypoints[static_cast<std::size_t>(best)].response) best = m;
+    }
     out.push_back(keypoints[static_cast<std::size_t>(best)]);
   }
   if (static_cast<int>(out.size()) > wanted) {
@@ -83,6 +116,13 @@ std::vector<cv::KeyPoint> distribute_quadtree(const std::vector<cv::KeyPoint>& k
                      [](const cv::KeyPoint& a, const cv::KeyPoint& b) { return a.response > b.response; });
     out.resize(static_cast<std::size_t>(wanted));
   }
+}
+
+std::vector<cv::KeyPoint> distribute_quadtree(const std::vector<cv::KeyPoint>& keypoints, const cv::Rect2f& bounds,
+                                              int wanted) {
+  std::vector<cv::KeyPoint> out;
+  QuadtreeScratch scratch;
+  distribute_quadtree(keypoints, bounds, wanted, out, scratch);
   return out;
 }
 

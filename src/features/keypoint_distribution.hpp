@@ -15,6 +15,22 @@ namespace builtscene {
 std::vector<cv::KeyPoint> distribute_quadtree(const std::vector<cv::KeyPoint>& keypoints, const cv::Rect2f& bounds,
                                               int wanted);
 
+// Working memory of the quadtree, kept by a caller that distributes every frame so the
+// tree allocates nothing once warm.
+struct QuadtreeScratch {
+  struct Cell {
+    cv::Rect2f box;
+    int begin, end;  // range of `members`
+    int size() const { return end - begin; }
+  };
+  std::vector<Cell> cells;
+  std::vector<int> members, tmp, heap, root_count, root_fill;
+  std::vector<char> split_away;
+};
+// The same, writing into `out` (cleared first) and reusing `scratch`.
+void distribute_quadtree(const std::vector<cv::KeyPoint>& keypoints, const cv::Rect2f& bounds, int wanted,
+                         std::vector<cv::KeyPoint>& out, QuadtreeScratch& scratch);
+
 // Spread of a keypoint set for evaluation: the fraction of cells of a cols x rows grid over
 // the image that hold at least one keypoint.
 double grid_coverage(const std::vector<cv::KeyPoint>& keypoints, cv::Size image, int cols, int rows);

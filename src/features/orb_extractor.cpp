@@ -80,6 +80,8 @@ OrbExtractor::OrbExtractor(OrbExtractorOptions options) : options_(options) {
     per *= f;
   }
   features_per_level_.push_back(std::max(0, options_.n_features - total));
+  scratch_.resize(static_cast<std::size_t>(L));
+  per_level_.resize(static_cast<std::size_t>(L));
 
   // Circular patch: for each row offset v, the largest u with u^2 + v^2 <= r^2.
   umax_.resize(kOrbPatchRadius + 1);
@@ -102,15 +104,17 @@ void OrbExtractor::build_pyramid(const cv::Mat& gray) {
   }
 }
 
-std::vector<cv::KeyPoint> OrbExtractor::detect_level(int level) const {
+void OrbExtractor::detect_level(int level, std::vector<cv::KeyPoint>& out) {
+  out.clear();
   const cv::Mat& img = levels_[static_cast<std::size_t>(level)];
-  if (img.empty() || img.cols <= 2 * kBorder || img.rows <= 2 * kBorder) return {};
+  if (img.empty() || img.cols <= 2 * kBorder || img.rows <= 2 * kBorder) return;
+  LevelScratch& scratch = scratch_[static_cast<std::size_t>(level)];
   // FAST at ini_th_fast over the inner region; then, only in cells where nothing passed,
   // FAST again at min_th_fast on that cell (plus the 3-pixel ring FAST needs). The second
   // pass touches only low-contrast cells, which keeps the cost near one FAST pass.
   const int x0 = kBorder - 3, y0 = kBorder - 3;
   const cv::Rect inner(x0, y0, img.cols - 2 * x0, img.rows - 2 * y0);
-  std::vector<cv::KeyPoint> strong_kps;
+  std::vector<cv::KeyPoint>& strong_kps = scratch.candidates;
   cv::FAST(img(inner), strong_kps, options_.ini_th_fast, true, cv::FastFeatureDetector::TYPE_9_16);
   const int cells_x = std::max(1, (img.cols - 2 * kBorder) / kThresholdCell);
   const int cells_y = std::max(1, (img.rows - 2 * kBorder) / kThresholdCell);
@@ -120,9 +124,10 @@ std::vector<cv::KeyPoint> OrbExtractor::detect_level(int level) const {
     return k.pt.x >= kBorder && k.pt.y >= kBorder && k.pt.x < static_cast<float>(img.cols - kBorder) &&
            k.pt.y < static_cast<float>(img.rows - kBorder);
   };
-  std::vector<char> has_strong(static_cast<std::size_t>(cells_x * cells_y), 0);
-  std::vector<cv::KeyPoint> kept;
-  kept.reserve(strong_kps.size() + 256);
+  std::vector<char>& has_strong = scratch.has_strong;
+  has_strong.assign(static_cast<std::size_t>(cells_x * cells_y), 0);
+  std::vector<cv::KeyPoint>& kept = scratch.kept;
+  kept.clear();
   for (auto& k : strong_kps) {
     k.pt.x += static_cast<float>(x0);
     k.pt.y += static_cast<float>(y0);
@@ -135,7 +140,7 @@ std::vector<cv::KeyPoint> OrbExtractor::detect_level(int level) const {
   if (min_th_fast_now_ < options_.ini_th_fast) {
     // Adjacent weak cells of a row are scanned in one call: a FAST call has a fixed cost
     // (threshold table, row buffers) that dominated when every 32-pixel cell paid it.
-    std::vector<cv::KeyPoint> weak;
+    std::vector<cv::KeyPoint>& weak = scratch.weak;
     auto cell_x = [&](int cx) {
       return cx == cells_x ? img.cols - kBorder : kBorder + static_cast<int>(std::floor(static_cast<float>(cx) * cw));
     };
@@ -166,7 +171,7 @@ std::vector<cv::KeyPoint> OrbExtractor::detect_level(int level) const {
   }
   const cv::Rect2f bounds(static_cast<float>(kBorder), static_cast<float>(kBorder),
                           static_cast<float>(img.cols - 2 * kBorder), static_cast<float>(img.rows - 2 * kBorder));
-  return distribute_quadtree(kept, bounds, features_per_level_[static_cast<std::size_t>(level)]);
+  distribute_quadtree(kept, bounds, features_per_level_[static_cast<std::size_t>(level)], out, scratch.quadtree);
 }
 
 float OrbExtractor::orientation(const cv::Mat& image, cv::Point2f pt) const {
@@ -188,11 +193,11 @@ float OrbExtractor::orientation(const cv::Mat& image, cv::Point2f pt) const {
   return cv::fastAtan2(static_cast<float>(m01), static_cast<float>(m10));
 }
 
-void OrbExtractor::describe_level(int l, std::vector<cv::KeyPoint>& kps, cv::Mat& desc) const {
+void OrbExtractor::describe_level(int l, std::vector<cv::KeyPoint>& kps, cv::Mat& desc) {
   desc.create(static_cast<int>(kps.size()), 32, CV_8UC1);
   if (kps.empty()) return;
   const cv::Mat& img = levels_[static_cast<std::size_t>(l)];
-  cv::Mat blurred;
+  cv::Mat& blurred = scratch_[static_cast<std::size_t>(l)].blurred;
   cv::GaussianBlur(img, blurred, cv::Size(7, 7), 2, 2, cv::BORDER_REFLECT_101);
   const auto& table = rotated_pattern_table();
   const float scale = pyramid_.scale[static_cast<std::size_t>(l)];
@@ -234,12 +239,11 @@ void OrbExtractor::extract(const cv::Mat& gray_in, std::vector<cv::KeyPoint>& ke
   // Levels are independent once the pyramid exists: detection, orientation and description
   // run per level, in parallel when allowed; the result does not depend on the thread count.
   const auto L = static_cast<std::size_t>(options_.n_levels);
-  std::vector<std::vector<cv::KeyPoint>> per_level(L);
-  std::vector<cv::Mat> per_level_desc(L);
+  auto& per_level = per_level_;
   auto work = [&](const cv::Range& r) {
     for (int l = r.start; l < r.end; ++l) {
-      per_level[static_cast<std::size_t>(l)] = detect_level(l);
-      describe_level(l, per_level[static_cast<std::size_t>(l)], per_level_desc[static_cast<std::size_t>(l)]);
+      detect_level(l, per_level[static_cast<std::size_t>(l)]);
+      describe_level(l, per_level[static_cast<std::size_t>(l)], scratch_[static_cast<std::size_t>(l)].descriptors);
     }
   };
   if (options_.parallel_levels) cv::parallel_for_(cv::Range(0, options_.n_levels), work);
@@ -252,8 +256,9 @@ void OrbExtractor::extract(const cv::Mat& gray_in, std::vector<cv::KeyPoint>& ke
   int row = 0;
   for (std::size_t l = 0; l < L; ++l) {
     if (per_level[l].empty()) continue;
-    per_level_desc[l].copyTo(descriptors.rowRange(row, row + per_level_desc[l].rows));
-    row += per_level_desc[l].rows;
+    const cv::Mat& d = scratch_[l].descriptors;
+    d.copyTo(descriptors.rowRange(row, row + d.rows));
+    row += d.rows;
     keypoints.insert(keypoints.end(), per_level[l].begin(), per_level[l].end());
   }
 }

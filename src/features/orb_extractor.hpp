@@ -7,6 +7,8 @@
 
 #include <opencv2/core.hpp>
 
+#include "features/keypoint_distribution.hpp"
+
 namespace builtscene {
 
 class SettingsFile;
@@ -81,12 +83,24 @@ class OrbExtractor {
   std::vector<int> features_per_level_;
   std::vector<int> umax_;  // half-width of the circular patch per row offset
   std::vector<cv::Mat> levels_;
+  std::vector<std::vector<cv::KeyPoint>> per_level_;
   double noise_sigma_ = 0;
   int min_th_fast_now_ = 0;
+  // Working memory of one pyramid level, kept across frames: at 30 frames per second,
+  // allocating these per frame (about 1 MB of smoothed images alone) cost page faults and
+  // malloc time worth ~10 % of the extraction.
+  struct LevelScratch {
+    std::vector<cv::KeyPoint> candidates, weak, kept;
+    std::vector<char> has_strong;
+    QuadtreeScratch quadtree;
+    cv::Mat blurred, descriptors;
+  };
+  std::vector<LevelScratch> scratch_;
 
   void build_pyramid(const cv::Mat& gray);
-  std::vector<cv::KeyPoint> detect_level(int level) const;
-  void describe_level(int level, std::vector<cv::KeyPoint>& keypoints, cv::Mat& descriptors) const;
+  // Detected, spread keypoints of `level` into `out` (level pixels).
+  void detect_level(int level, std::vector<cv::KeyPoint>& out);
+  void describe_level(int level, std::vector<cv::KeyPoint>& keypoints, cv::Mat& descriptors);
   float orientation(const cv::Mat& image, cv::Point2f pt) const;
 };
 
