@@ -8,6 +8,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "features/brief_smoothing.hpp"
 #include "features/keypoint_distribution.hpp"
 #include "features/orb_extractor.hpp"
 
@@ -53,5 +54,47 @@ void BM_OpenCvOrb(benchmark::State& state) {
   state.counters["grid_coverage"] = builtscene::grid_coverage(k, img.size(), 32, 24);
 }
 BENCHMARK(BM_OpenCvOrb)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime();
+
+// The cost of the fallback threshold: the same extractor with FAST at 20 only (fewer
+// keypoints in low-contrast cells, so a narrower spread).
+void BM_OrbExtractorWithoutFallback(benchmark::State& state) {
+  const cv::Mat img = test_frame();
+  builtscene::OrbExtractorOptions o;
+  o.min_th_fast = o.ini_th_fast;
+  o.noise_factor = 0;
+  builtscene::OrbExtractor orb(o);
+  std::vector<cv::KeyPoint> k;
+  cv::Mat d;
+  for (auto _ : state) {
+    orb.extract(img, k, d);
+    benchmark::DoNotOptimize(d.data);
+  }
+  state.counters["keypoints"] = static_cast<double>(k.size());
+  state.counters["grid_coverage"] = builtscene::grid_coverage(k, img.size(), 32, 24);
+}
+BENCHMARK(BM_OrbExtractorWithoutFallback)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime();
+
+// The smoothing BRIEF is computed on, ours against the cv::GaussianBlur call it replaces
+// (same bytes out, tests/features/brief_smoothing_test.cpp), on the full-size frame.
+void BM_BriefSmoothing(benchmark::State& state) {
+  const cv::Mat img = test_frame();
+  cv::Mat out;
+  std::vector<std::uint16_t> scratch;
+  for (auto _ : state) {
+    builtscene::smooth_for_brief(img, out, scratch);
+    benchmark::DoNotOptimize(out.data);
+  }
+}
+BENCHMARK(BM_BriefSmoothing)->Unit(benchmark::kMicrosecond)->MeasureProcessCPUTime();
+
+void BM_OpenCvGaussianBlur7x7(benchmark::State& state) {
+  const cv::Mat img = test_frame();
+  cv::Mat out;
+  for (auto _ : state) {
+    cv::GaussianBlur(img, out, cv::Size(7, 7), 2, 2, cv::BORDER_REFLECT_101);
+    benchmark::DoNotOptimize(out.data);
+  }
+}
+BENCHMARK(BM_OpenCvGaussianBlur7x7)->Unit(benchmark::kMicrosecond)->MeasureProcessCPUTime();
 
 }  // namespace

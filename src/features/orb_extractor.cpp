@@ -10,6 +10,7 @@
 #include "core/errors.hpp"
 #include "core/image_noise.hpp"
 #include "core/settings_file.hpp"
+#include "features/brief_smoothing.hpp"
 #include "features/keypoint_distribution.hpp"
 #include "features/orb_pattern.hpp"
 
@@ -197,8 +198,9 @@ void OrbExtractor::describe_level(int l, std::vector<cv::KeyPoint>& kps, cv::Mat
   desc.create(static_cast<int>(kps.size()), 32, CV_8UC1);
   if (kps.empty()) return;
   const cv::Mat& img = levels_[static_cast<std::size_t>(l)];
-  cv::Mat& blurred = scratch_[static_cast<std::size_t>(l)].blurred;
-  cv::GaussianBlur(img, blurred, cv::Size(7, 7), 2, 2, cv::BORDER_REFLECT_101);
+  LevelScratch& scratch = scratch_[static_cast<std::size_t>(l)];
+  cv::Mat& blurred = scratch.blurred;
+  smooth_for_brief(img, blurred, scratch.smoothing);
   const auto& table = rotated_pattern_table();
   const float scale = pyramid_.scale[static_cast<std::size_t>(l)];
   const int step = static_cast<int>(blurred.step1());

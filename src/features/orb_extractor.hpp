@@ -3,6 +3,7 @@
 // with a per-cell adaptive threshold (ini_th_fast, falling back to min_th_fast in cells where
 // nothing passes), an even spread per level by quadtree, orientation by intensity centroid,
 // and 256-bit rotated BRIEF descriptors computed on the Gaussian-smoothed level.
+#include <cstdint>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -94,6 +95,7 @@ class OrbExtractor {
     std::vector<char> has_strong;
     QuadtreeScratch quadtree;
     cv::Mat blurred, descriptors;
+    std::vector<std::uint16_t> smoothing;
   };
   std::vector<LevelScratch> scratch_;
 
