@@ -266,7 +266,7 @@ const bool registered_slam = register_command({
           ->capture_default_str()
           ->check(CLI::NonNegativeNumber);
       cmd.add_option("--lcm", opt->ogm.lcm_url,
-                     "Publish PosesAndLaserScans on POSES_AND_LASER_SCANS over this LCM URL (udpm://..., file://LOG?mode=w)");
+                     "Publish PosesAndLaserScans on POSES_AND_LASER_SCANS and loop closures on LOOP_EVENTS over this LCM URL (udpm://..., file://LOG?mode=w)");
       return [opt] { return run_slam(*opt); };
     },
     .order = 40});

@@ -59,10 +59,35 @@ void SlamOgmOutput::write_snapshot(const std::string& name) const {
 }
 
 void SlamOgmOutput::subscribe(slam::System& system) {
-  system.subscribe_loop_events([this](const slam::LoopEvent&) {
+  system.subscribe_loop_events([this](const slam::LoopEvent& e) {
     std::lock_guard lock(loop_mutex_);
     ++loop_events_pending_;
+    if (!lcm_) return;
+    LcmLoopEvent m;
+    m.stage = e.stage == slam::LoopEvent::Stage::kPoseGraph ? "pose_graph" : "global_ba";
+    m.loop = e.loop;
+    m.frame = e.frame;
+    m.time = e.timestamp;
+    m.keyframe = e.keyframe;
+    m.matched_keyframe = e.matched_keyframe;
+    m.inliers = e.inliers;
+    m.correction = e.correction;
+    for (const auto& k : e.keyframes) {
+      m.keyframe_ids.push_back(k.id);
+      m.stamps.push_back(k.timestamp);
+      m.T_wc.push_back(k.T_wc);
+    }
+    lcm_events_pending_.push_back(std::move(m));
   });
+}
+
+void SlamOgmOutput::publish_loop_events() {
+  std::vector<LcmLoopEvent> events;
+  {
+    std::lock_guard lock(loop_mutex_);
+    events.swap(lcm_events_pending_);
+  }
+  for (const auto& e : events) lcm_->publish(e);
 }
 
 void SlamOgmOutput::rebuild_after_loops(slam::System& system) {
@@ -84,6 +109,7 @@ void SlamOgmOutput::rebuild_after_loops(slam::System& system) {
 
 void SlamOgmOutput::after_frame(slam::System& system, const slam::TrackingOutcome& outcome, double timestamp,
                                 const cv::Mat& depth) {
+  if (lcm_) publish_loop_events();
   rebuild_after_loops(system);
   if (!outcome.new_keyframe) return;
   const auto start = std::chrono::steady_clock::now();
@@ -114,6 +140,7 @@ void SlamOgmOutput::after_frame(slam::System& system, const slam::TrackingOutcom
 }
 
 nlohmann::json SlamOgmOutput::finish(slam::System& system) {
+  if (lcm_) publish_loop_events();
   nlohmann::json j = {{"batches", batches_}, {"full_batches", full_batches_}, {"loop_rebuilds", loop_rebuilds_}};
   if (!emitter_) {
     spdlog::warn("occupancy grid: no keyframe with depth; no map written");

@@ -2,7 +2,8 @@
 // `slam --ogm-out`: the occupancy grid built live beside the feature map (the source's
 // OGM-enhanced SLAM). For every new keyframe the SLAM's PosesAndLaserScans batch of one updates
 // the grid; every N keyframes, after every loop closure and at the end, the batch of all
-// keyframes with their optimized poses rebuilds it. Batches also go out over LCM (--lcm URL).
+// keyframes with their optimized poses rebuilds it. Batches and the SLAM's loop events also go
+// out over LCM (--lcm URL).
 #include <filesystem>
 #include <map>
 #include <memory>
@@ -63,6 +64,10 @@ class SlamOgmOutput {
   // after_frame() rebuilds.
   std::mutex loop_mutex_;
   long loop_events_pending_ = 0;
+  // With --lcm the events themselves go out on LOOP_EVENTS, published from the tracking
+  // thread (after_frame, finish) like every other message of this publisher.
+  std::vector<LcmLoopEvent> lcm_events_pending_;
+  void publish_loop_events();
   void rebuild_after_loops(slam::System& system);
 
   void consume(const PosesAndLaserScans& batch);

@@ -1,9 +1,12 @@
 #include "ogm/lcm_publisher.hpp"
 
+#include <algorithm>
+#include <array>
 #include <chrono>
 
 #include <lcm/lcm-cpp.hpp>
 
+#include "builtscene/loop_event_t.hpp"
 #include "builtscene/poi_event_t.hpp"
 #include "builtscene/poses_and_laser_scans_t.hpp"
 #include "core/errors.hpp"
@@ -37,6 +40,13 @@ builtscene::laser_scan_t to_msg(const LaserScan& s) {
   m.num_ranges = static_cast<int32_t>(s.ranges.size());
   m.ranges = s.ranges;
   return m;
+}
+
+void to_array7(const SE3& T, double* out) {
+  const Eigen::Vector3d t = T.translation();
+  const Eigen::Quaterniond q = T.rotation();
+  const double v[7] = {t.x(), t.y(), t.z(), q.x(), q.y(), q.z(), q.w()};
+  std::copy(v, v + 7, out);
 }
 
 }  // namespace
@@ -77,6 +87,29 @@ void LcmPublisher::publish(const LcmPoiEvent& e, const std::string& channel) {
   m.pose = to_msg(e.pose);
   m.poi = e.poi;
   m.distance = e.distance;
+  if (impl_->lcm.publish(channel, &m) != 0) throw Failure("LCM publish on " + channel + " failed");
+  ++published_;
+}
+
+void LcmPublisher::publish(const LcmLoopEvent& e, const std::string& channel) {
+  builtscene::loop_event_t m;
+  m.utime = utime_now();
+  m.stage = e.stage;
+  m.loop = e.loop;
+  m.frame = e.frame;
+  m.time = e.time;
+  m.keyframe = e.keyframe;
+  m.matched_keyframe = e.matched_keyframe;
+  m.inliers = e.inliers;
+  to_array7(e.correction, m.correction);
+  m.num_keyframes = static_cast<int32_t>(e.T_wc.size());
+  for (std::size_t i = 0; i < e.T_wc.size(); ++i) {
+    m.keyframe_ids.push_back(i < e.keyframe_ids.size() ? e.keyframe_ids[i] : -1);
+    m.stamps.push_back(i < e.stamps.size() ? e.stamps[i] : 0.0);
+    std::array<double, 7> p{};
+    to_array7(e.T_wc[i], p.data());
+    m.poses.push_back({p[0], p[1], p[2], p[3], p[4], p[5], p[6]});
+  }
   if (impl_->lcm.publish(channel, &m) != 0) throw Failure("LCM publish on " + channel + " failed");
   ++published_;
 }

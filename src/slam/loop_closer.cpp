@@ -168,7 +168,11 @@ std::unique_ptr<LoopCloser::LoopMatch> LoopCloser::verify(KeyFrame& kf, KeyFrame
   if (cand.bow_features.empty() || kf.bow_features.empty()) return nullptr;
   int n = 0;
   const auto matches = search_by_bow(cand, *kf.f, kf.bow_features, &n);
-  if (n < opt_.min_bow_matches) return nullptr;
+  auto reject = [&](const char* stage, int count) {
+    spdlog::debug("loop candidate {} for keyframe {} (frame {}): {} ({})", cand.id, kf.id, kf.frame_id, stage, count);
+    return nullptr;
+  };
+  if (n < opt_.min_bow_matches) return reject("too few BoW matches", n);
   // 3D-3D pairs in the two cameras' frames: the candidate's points, and for the current
   // keyframe its own map point at the keypoint (or the keypoint's depth).
   const SE3 T1 = kf.pose(), T2 = cand.pose();
@@ -185,10 +189,10 @@ std::unique_ptr<LoopCloser::LoopMatch> LoopCloser::verify(KeyFrame& kf, KeyFrame
     dst.push_back(p1);
     keypoint.push_back(j);
   }
-  if (static_cast<int>(src.size()) < opt_.ransac_min_inliers) return nullptr;
+  if (static_cast<int>(src.size()) < opt_.ransac_min_inliers) return reject("too few 3D-3D pairs", static_cast<int>(src.size()));
   const auto fit = ransac_rigid_transform(src, dst, opt_.ransac_inlier_m, opt_.ransac_min_inliers, opt_.ransac_iterations,
                                           static_cast<std::uint32_t>(kf.id));
-  if (!fit) return nullptr;
+  if (!fit) return reject("no rigid transform by RANSAC; pairs", static_cast<int>(src.size()));
   const SE3 T12(Eigen::Matrix3d(fit->transform.linear()), Eigen::Vector3d(fit->transform.translation()));
   // The keyframe relocalized against the candidate's map: reprojection errors decide.
   Frame frame(kf.frame_id, kf.timestamp, kf.f);
@@ -197,17 +201,42 @@ std::unique_ptr<LoopCloser::LoopMatch> LoopCloser::verify(KeyFrame& kf, KeyFrame
     if (fit->inliers[k]) frame.points[keypoint[k]] = matches[keypoint[k]];
   optimize_frame_pose(frame);
   int good = frame.keep_inlier_matches();
-  if (good < opt_.min_refined_inliers) return nullptr;
+  if (good < opt_.min_refined_inliers) return reject("too few inliers after pose refinement", good);
   search_keyframe_neighbourhood(frame, cand, cand.ordered_connections.size(), opt_.guided_search_radius);
   optimize_frame_pose(frame);
   good = frame.keep_inlier_matches();
-  if (good < opt_.min_inliers) return nullptr;
+  if (good < opt_.min_inliers) return reject("too few inliers after the guided search", good);
   // How far the loop would move the keyframe; both rules below judge it.
   const SE3 correction = frame.T_cw.inverse() * T1;
   const double angle_deg = Eigen::AngleAxisd(correction.rotation()).angle() * 180.0 / M_PI;
   const double moved = (frame.camera_center() - kf.camera_center()).norm();
+  // Path length along the keyframes in id order, for both rules below.
+  std::unordered_map<long, double> path_at;
+  {
+    double path_m = 0;
+    const KeyFrame* prev = nullptr;
+    for (const auto& k : map_.keyframes()) {  // by id
+      if (k->bad || k->id > kf.id) continue;
+      if (prev) path_m += (k->camera_center() - prev->camera_center()).norm();
+      path_at[k->id] = path_m;
+      prev = k.get();
+    }
+  }
+  auto path_between = [&](const KeyFrame& a, const KeyFrame& b) {
+    const auto ia = path_at.find(a.id), ib = path_at.find(b.id);
+    return ia == path_at.end() || ib == path_at.end() ? 0.0 : std::abs(ib->second - ia->second);
+  };
+  // Anchored: the keyframe shares points with an older keyframe it came back to, i.e. one
+  // much further away along the path than in space. Keyframes that merely see far along
+  // a straight corridor share points with keyframes 20-60 ids back too, but their path and
+  // distance agree; counting those made every loop in a corridor "anchored" (a true
+  // 3.3 m correction at the end of the 79 m corridor loop was refused).
   bool anchored = false;
-  for (const auto& [n, w] : kf.connections) anchored |= !n->bad && n->id < kf.id - opt_.min_keyframe_gap;
+  for (const auto& [n, w] : kf.connections) {
+    if (n->bad || n->id >= kf.id - opt_.min_keyframe_gap) continue;
+    const double apart = (n->camera_center() - kf.camera_center()).norm();
+    anchored |= path_between(*n, kf) > opt_.revisit_path_ratio * apart + opt_.revisit_margin_m;
+  }
   if (anchored) {
     if (moved > opt_.max_anchored_correction_m || angle_deg > opt_.max_anchored_correction_deg) {
       spdlog::info("loop candidate {} for keyframe {} (frame {}) rejected: {} inliers, but it would move a keyframe "
@@ -219,13 +248,7 @@ std::unique_ptr<LoopCloser::LoopMatch> LoopCloser::verify(KeyFrame& kf, KeyFrame
     }
   }
   {
-    double path_m = 0;
-    const KeyFrame* prev = nullptr;
-    for (const auto& k : map_.keyframes()) {  // by id
-      if (k->id < cand.id || k->id > kf.id) continue;
-      if (prev) path_m += (k->camera_center() - prev->camera_center()).norm();
-      prev = k.get();
-    }
+    const double path_m = path_between(cand, kf);
     const double max_m = opt_.max_correction_base_m + opt_.max_correction_per_metre * path_m;
     const double max_deg = opt_.max_correction_base_deg + opt_.max_correction_deg_per_metre * path_m;
     if (moved > max_m || angle_deg > max_deg) {
@@ -321,9 +344,11 @@ void LoopCloser::correct(const std::shared_ptr<KeyFrame>& kf, const LoopMatch& m
       const auto live = map_.keyframes();
       PoseGraph graph;
       std::unordered_map<const KeyFrame*, int> node;
+      std::vector<const KeyFrame*> node_kf;
       for (const auto& k : live) {
         if (k->bad) continue;
         node[k.get()] = static_cast<int>(graph.nodes.size());
+        node_kf.push_back(k.get());
         graph.nodes.push_back({k->pose(), k.get() == cand});
       }
       std::set<std::pair<long, long>> done;
@@ -349,6 +374,22 @@ void LoopCloser::correct(const std::shared_ptr<KeyFrame>& kf, const LoopMatch& m
       const auto t_pg = std::chrono::steady_clock::now();
       const auto result = optimize_pose_graph(graph, {opt_.pose_graph_iterations});
       add_time("pose_graph", t_pg);
+      if (result.solved) {
+        // The edge the optimized graph fits worst: a large residual left on an odometry-like
+        // edge means the graph could not spread the loop's error (debug aid).
+        double worst = 0;
+        std::size_t worst_edge = 0;
+        for (std::size_t e = 0; e < graph.edges.size(); ++e) {
+          const auto& ed = graph.edges[e];
+          const SE3 pred = result.poses[static_cast<std::size_t>(ed.i)] * result.poses[static_cast<std::size_t>(ed.j)].inverse();
+          const double r = (ed.T_ij.inverse() * pred).translation().norm();
+          if (r > worst) worst = r, worst_edge = e;
+        }
+        spdlog::debug("pose graph: {} nodes, {} edges, {} iterations max, cost {:.4g} -> {:.4g}, worst edge {} - {} off by {:.3f} m",
+                      graph.nodes.size(), graph.edges.size(), opt_.pose_graph_iterations, result.initial_cost, result.final_cost,
+                      graph.edges.empty() ? -1L : node_kf[static_cast<std::size_t>(graph.edges[worst_edge].i)]->id,
+                      graph.edges.empty() ? -1L : node_kf[static_cast<std::size_t>(graph.edges[worst_edge].j)]->id, worst);
+      }
       if (result.solved) {
         std::unordered_map<const KeyFrame*, SE3> pre;  // after the first correction, before the graph
         for (const auto& k : live) {

@@ -64,6 +64,11 @@ struct LoopClosingOptions {
   // inliers in the second lap (docs/slam.md).
   double max_anchored_correction_m = 0.5;
   double max_anchored_correction_deg = 5.0;
+  // "Came back to": the path from the older keyframe to this one is longer than
+  // revisit_path_ratio x their distance + revisit_margin_m (a lap of the lab room: ~17 m of
+  // path for < 1 m apart; a corridor seen far ahead: path = distance).
+  double revisit_path_ratio = 2.0;
+  double revisit_margin_m = 2.0;
   // Any loop: the correction must be a drift the path between the two keyframes could have
   // built up: at most base + per_metre x path length (the keyframe centres from the matched
   // keyframe to this one, in id order). Seen on the generated lab room carried by hand (900

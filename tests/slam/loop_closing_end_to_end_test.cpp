@@ -7,9 +7,13 @@
 
 #include <unistd.h>
 
+#include <cmath>
 #include <map>
 
+#include <lcm/lcm-cpp.hpp>
 #include <nlohmann/json.hpp>
+
+#include "builtscene/loop_event_t.hpp"
 
 #include "../common/run_cli.hpp"
 #include "io/trajectory.hpp"
@@ -61,7 +65,8 @@ TEST(LoopClosing, TwoLoopsOfTheLabRoomAreClosedAndTheErrorDrops) {
   // the snapshots just before and after each rebuild show what the rebuild did.
   const SlamRun on = run_slam(world, "--ogm-out " + shell_quote((world / "grid").string()) + " --ogm-loop-snapshots " +
                                          shell_quote((world / "snapshots").string()) + " --keyframes " +
-                                         shell_quote((world / "kf_on.txt").string()));
+                                         shell_quote((world / "kf_on.txt").string()) + " --lcm " +
+                                         shell_quote("file://" + (world / "live.lcmlog").string() + "?mode=w"));
   const SlamRun off = run_slam(world, "--no-loop-closing --ogm-out " + shell_quote((world / "grid_off").string()) +
                                           " --keyframes " + shell_quote((world / "kf_off.txt").string()));
   ASSERT_FALSE(on.summary.is_null());
@@ -89,6 +94,40 @@ TEST(LoopClosing, TwoLoopsOfTheLabRoomAreClosedAndTheErrorDrops) {
                 e["correction_m"].get<double>());
     EXPECT_GT(t - tm, 5.0);
     EXPECT_LT(apart, 1.5);
+  }
+  // Each loop also went out over LCM as it happened (LOOP_EVENTS): a pose-graph event per loop
+  // with the frame the summary reports, and the keyframe poses it carries put the loop's two
+  // keyframes at the same true place as well.
+  {
+    lcm::LogFile log((world / "live.lcmlog").string(), "r");
+    ASSERT_TRUE(log.good());
+    std::vector<long> frames;
+    int global_ba = 0;
+    while (const lcm::LogEvent* ev = log.readNextEvent()) {
+      if (ev->channel != "LOOP_EVENTS") continue;
+      builtscene::loop_event_t m;
+      ASSERT_EQ(m.decode(ev->data, 0, ev->datalen), ev->datalen);
+      if (m.stage == "global_ba") {
+        ++global_ba;
+        continue;
+      }
+      ASSERT_EQ(m.stage, "pose_graph");
+      frames.push_back(m.frame);
+      ASSERT_EQ(static_cast<std::size_t>(m.num_keyframes), m.poses.size());
+      std::map<long, std::size_t> at;
+      for (std::size_t i = 0; i < m.keyframe_ids.size(); ++i) at[m.keyframe_ids[i]] = i;
+      ASSERT_TRUE(at.count(m.keyframe) && at.count(m.matched_keyframe));
+      const double t = m.stamps[at[m.keyframe]], tm = m.stamps[at[m.matched_keyframe]];
+      EXPECT_LT((true_position(truth, t) - true_position(truth, tm)).norm(), 1.5);
+      // After the correction the two keyframes sit close together in the SLAM's map too.
+      const auto& a = m.poses[at[m.keyframe]];
+      const auto& b = m.poses[at[m.matched_keyframe]];
+      EXPECT_LT(std::hypot(a[0] - b[0], a[1] - b[1], a[2] - b[2]), 1.5);
+    }
+    std::vector<long> summary_frames;
+    for (const auto& f : on.summary["loops"]["frames"]) summary_frames.push_back(f.get<long>());
+    EXPECT_EQ(frames, summary_frames);
+    EXPECT_EQ(global_ba, on.summary["loop_closing"]["global_ba_merged"].get<int>());
   }
   // The grids against the world's truth map, each carried into the truth's frame with its own
   // keyframes' best rigid alignment to ground truth. The final grid with loop closing beats
