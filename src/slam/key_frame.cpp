@@ -72,11 +72,14 @@ void KeyFrame::update_connections(int min_weight) {
     if (!kept.count(kf)) kf->erase_connection(this);
   connections = kept;
   sort_connections();
-  if (!has_parent_link && id != 0) {
-    parent = best->shared_from_this();
-    best->children.insert(this);
-    has_parent_link = true;
-  }
+  if (id != 0) link_to_parent(*best);
+}
+
+void KeyFrame::link_to_parent(KeyFrame& p) {
+  if (has_parent_link || &p == this) return;
+  parent = p.shared_from_this();
+  p.children.insert(this);
+  has_parent_link = true;
 }
 
 std::vector<KeyFrame*> KeyFrame::best_covisibles(std::size_t n) const {

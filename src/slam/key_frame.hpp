@@ -58,6 +58,8 @@ class KeyFrame : public std::enable_shared_from_this<KeyFrame> {
   std::shared_ptr<KeyFrame> parent;
   KeyFrameSet children;
   bool has_parent_link = false;  // set once the keyframe joined the tree
+  // Joins the tree under `p` (once; no-op when already linked).
+  void link_to_parent(KeyFrame& p);
   SE3 T_cp;                      // pose relative to parent, frozen when this keyframe turns bad
 
   // Bag of words of the keypoint descriptors and its direct index, set once when the keyframe

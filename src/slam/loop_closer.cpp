@@ -385,8 +385,18 @@ void LoopCloser::correct(const std::shared_ptr<KeyFrame>& kf, const LoopMatch& m
           const double r = (ed.T_ij.inverse() * pred).translation().norm();
           if (r > worst) worst = r, worst_edge = e;
         }
-        spdlog::debug("pose graph: {} nodes, {} edges, {} iterations max, cost {:.4g} -> {:.4g}, worst edge {} - {} off by {:.3f} m",
-                      graph.nodes.size(), graph.edges.size(), opt_.pose_graph_iterations, result.initial_cost, result.final_cost,
+        // Parts of the graph no edge joins move rigidly: more than one is a defect.
+        std::vector<int> root(graph.nodes.size());
+        for (std::size_t i = 0; i < root.size(); ++i) root[i] = static_cast<int>(i);
+        const auto find = [&root](int i) {
+          while (root[static_cast<std::size_t>(i)] != i) i = root[static_cast<std::size_t>(i)] = root[static_cast<std::size_t>(root[static_cast<std::size_t>(i)])];
+          return i;
+        };
+        for (const auto& ed : graph.edges) root[static_cast<std::size_t>(find(ed.i))] = find(ed.j);
+        int parts = 0;
+        for (std::size_t i = 0; i < root.size(); ++i) parts += find(static_cast<int>(i)) == static_cast<int>(i);
+        spdlog::debug("pose graph: {} nodes in {} connected parts, {} edges, {} iterations max, cost {:.4g} -> {:.4g}, worst edge {} - {} off by {:.3f} m",
+                      graph.nodes.size(), parts, graph.edges.size(), opt_.pose_graph_iterations, result.initial_cost, result.final_cost,
                       graph.edges.empty() ? -1L : node_kf[static_cast<std::size_t>(graph.edges[worst_edge].i)]->id,
                       graph.edges.empty() ? -1L : node_kf[static_cast<std::size_t>(graph.edges[worst_edge].j)]->id, worst);
       }
