@@ -27,9 +27,9 @@ cv::Mat test_frame() {
   return img;
 }
 
-void BM_OrbExtractor(benchmark::State& state) {
+void run_extractor(benchmark::State& state, const builtscene::OrbExtractorOptions& options) {
   const cv::Mat img = test_frame();
-  builtscene::OrbExtractor orb;
+  builtscene::OrbExtractor orb(options);
   std::vector<cv::KeyPoint> k;
   cv::Mat d;
   for (auto _ : state) {
@@ -39,6 +39,7 @@ void BM_OrbExtractor(benchmark::State& state) {
   state.counters["keypoints"] = static_cast<double>(k.size());
   state.counters["grid_coverage"] = builtscene::grid_coverage(k, img.size(), 32, 24);
 }
+void BM_OrbExtractor(benchmark::State& state) { run_extractor(state, {}); }
 BENCHMARK(BM_OrbExtractor)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime();
 
 void BM_OpenCvOrb(benchmark::State& state) {
@@ -58,19 +59,10 @@ BENCHMARK(BM_OpenCvOrb)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime();
 // The cost of the fallback threshold: the same extractor with FAST at 20 only (fewer
 // keypoints in low-contrast cells, so a narrower spread).
 void BM_OrbExtractorWithoutFallback(benchmark::State& state) {
-  const cv::Mat img = test_frame();
   builtscene::OrbExtractorOptions o;
   o.min_th_fast = o.ini_th_fast;
   o.noise_factor = 0;
-  builtscene::OrbExtractor orb(o);
-  std::vector<cv::KeyPoint> k;
-  cv::Mat d;
-  for (auto _ : state) {
-    orb.extract(img, k, d);
-    benchmark::DoNotOptimize(d.data);
-  }
-  state.counters["keypoints"] = static_cast<double>(k.size());
-  state.counters["grid_coverage"] = builtscene::grid_coverage(k, img.size(), 32, 24);
+  run_extractor(state, o);
 }
 BENCHMARK(BM_OrbExtractorWithoutFallback)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime();
 

@@ -1,7 +1,6 @@
 #include "ogm/lcm_publisher.hpp"
 
 #include <algorithm>
-#include <array>
 #include <chrono>
 
 #include <lcm/lcm-cpp.hpp>
@@ -42,11 +41,11 @@ builtscene::laser_scan_t to_msg(const LaserScan& s) {
   return m;
 }
 
-void to_array7(const SE3& T, double* out) {
+// A pose as the messages carry it: tx ty tz qx qy qz qw (TUM order).
+std::vector<double> tum7(const SE3& T) {
   const Eigen::Vector3d t = T.translation();
   const Eigen::Quaterniond q = T.rotation();
-  const double v[7] = {t.x(), t.y(), t.z(), q.x(), q.y(), q.z(), q.w()};
-  std::copy(v, v + 7, out);
+  return {t.x(), t.y(), t.z(), q.x(), q.y(), q.z(), q.w()};
 }
 
 }  // namespace
@@ -69,9 +68,7 @@ void LcmPublisher::publish(const PosesAndLaserScans& batch, const std::string& c
   m.num_keyframes = static_cast<int32_t>(batch.pairs.size());
   for (std::size_t i = 0; i < batch.pairs.size(); ++i) {
     m.stamps.push_back(batch.stamps[i]);
-    const Eigen::Vector3d t = batch.T_wc[i].translation();
-    const Eigen::Quaterniond q = batch.T_wc[i].rotation();
-    m.poses.push_back({t.x(), t.y(), t.z(), q.x(), q.y(), q.z(), q.w()});
+    m.poses.push_back(tum7(batch.T_wc[i]));
     m.poses2d.push_back(to_msg(batch.pairs[i].pose));
     m.scans.push_back(to_msg(batch.pairs[i].scan));
   }
@@ -101,14 +98,13 @@ void LcmPublisher::publish(const LcmLoopEvent& e, const std::string& channel) {
   m.keyframe = e.keyframe;
   m.matched_keyframe = e.matched_keyframe;
   m.inliers = e.inliers;
-  to_array7(e.correction, m.correction);
+  const auto c = tum7(e.correction);
+  std::copy(c.begin(), c.end(), m.correction);
   m.num_keyframes = static_cast<int32_t>(e.T_wc.size());
   for (std::size_t i = 0; i < e.T_wc.size(); ++i) {
     m.keyframe_ids.push_back(i < e.keyframe_ids.size() ? e.keyframe_ids[i] : -1);
     m.stamps.push_back(i < e.stamps.size() ? e.stamps[i] : 0.0);
-    std::array<double, 7> p{};
-    to_array7(e.T_wc[i], p.data());
-    m.poses.push_back({p[0], p[1], p[2], p[3], p[4], p[5], p[6]});
+    m.poses.push_back(tum7(e.T_wc[i]));
   }
   if (impl_->lcm.publish(channel, &m) != 0) throw Failure("LCM publish on " + channel + " failed");
   ++published_;
