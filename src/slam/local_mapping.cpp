@@ -193,17 +193,6 @@ void LocalMapping::insert_into_map(KeyFrame& kf) {
     }
   }
   kf.update_connections();
-  // A keyframe made while the depth-odometry bridge carried tracking shares no map point with
-  // any other (all its points are new), so covisibility gives it no parent. Without one the
-  // spanning tree, and with it the essential graph, falls apart at every bridged stretch: a
-  // loop correction then moved the two parts rigidly and left a step of metres between them
-  // (corridor, 2026-12-02). Its parent is the newest older keyframe, the one tracking came from.
-  if (!kf.has_parent_link && kf.id != 0) {
-    KeyFrame* previous = nullptr;
-    for (const auto& k : map_.keyframes())  // by id
-      if (!k->bad && k->id < kf.id) previous = k.get();
-    if (previous) kf.link_to_parent(*previous);
-  }
 }
 
 void LocalMapping::cull_recent_points(const KeyFrame& kf) {

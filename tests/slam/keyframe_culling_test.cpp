@@ -135,37 +135,5 @@ TEST_F(KeyFrameCulling, SetBadUnlinksEverything) {
   }
 }
 
-// The spanning tree stays connected when a keyframe shares no map point with any other (made
-// while the depth-odometry bridge carried tracking): local mapping gives it the newest older
-// keyframe as parent, so the essential graph has an edge there. Without it a loop correction
-// moved the two sides of such a gap rigidly (docs/slam.md, 2026-12-02).
-TEST_F(KeyFrameCulling, AKeyframeSharingNoPointJoinsTheTreeUnderThePreviousKeyframe) {
-  auto first = make_kf(0, 20, 20, 1);
-  auto second = make_kf(1, 20, 20, 1);
-  for (int i = 0; i < 20; ++i) share(second, i, {first});
-  auto lonely = make_kf(2, 20, 20, 1);  // no shared point
-  for (int i = 0; i < 20; ++i) {
-    auto p = std::make_shared<MapPoint>(map_.next_point_id(), Eigen::Vector3d(0, 0, 1), lonely.get(), lonely->id);
-    p->add_observation(lonely.get(), i);
-    lonely->add_point(i, p);
-    map_.add_point(p);
-  }
-  LocalMappingOptions o;
-  o.triangulation = false;
-  LocalMapping mapping(map_, o);
-  {
-    std::lock_guard lock(map_.mutex());
-    mapping.insert_keyframe(second);
-    mapping.insert_keyframe(lonely);
-  }
-  mapping.run_pending();
-  ASSERT_TRUE(second->has_parent_link);
-  EXPECT_EQ(second->parent.get(), first.get());  // by covisibility
-  ASSERT_TRUE(lonely->has_parent_link);
-  EXPECT_EQ(lonely->parent.get(), second.get());  // by order
-  EXPECT_TRUE(lonely->connections.empty());
-  EXPECT_EQ(second->children.count(lonely.get()), 1u);
-}
-
 }  // namespace
 }  // namespace builtscene::slam
