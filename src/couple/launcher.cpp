@@ -14,6 +14,7 @@
 
 #include "core/errors.hpp"
 #include "core/logging.hpp"
+#include "couple/event_tracker.hpp"
 #include "couple/lcm_codec.hpp"
 #include "couple/hybrid_transport.hpp"
 #include "couple/lcm_log.hpp"
@@ -41,7 +42,8 @@ class Monitor {
       statuses_[m.name].steps = m.steps();
       if (log_)
         for (const auto& p : m.publish)
-          recorded_.emplace(p.channel, Recorded{LcmCodec(sc.types, p.type), {}, p.initial ? -1 : 0, m.steps(), m.name});
+          recorded_.emplace(p.channel, Recorded{LcmCodec(sc.types, p.type), {}, p.initial ? -1 : 0, m.steps(), m.name,
+                                                p.events, EventTracker(p.initial ? -1 : 0)});
     }
     last_progress_ = Clock::now();
   }
@@ -56,6 +58,14 @@ class Monitor {
     s.utime = now_us();
     bool complete = true;
     for (auto& [ch, r] : recorded_) {
+      if (r.events) {
+        // Event-driven: complete up to where the producer's counts say; ask for the rest.
+        const int64_t done = r.tracker.complete();
+        if (done < r.total) complete = false;
+        s.needs.emplace_back(ch, done >= r.total ? std::numeric_limits<int64_t>::max() : done);
+        if (done < r.total && statuses_.at(r.producer).step > done) s.waiting.emplace_back(ch, done);
+        continue;
+      }
       while (r.steps.count(r.next)) r.steps.erase(r.next++);
       if (r.next < r.total) complete = false;
       s.needs.emplace_back(ch, r.next >= r.total ? std::numeric_limits<int64_t>::max() : r.next);
@@ -74,7 +84,11 @@ class Monitor {
       auto it = recorded_.find(ch);
       if (it != recorded_.end()) {
         try {
-          it->second.steps.insert(it->second.codec.read_int64(d, n, kStepField));
+          const int64_t step = it->second.codec.read_int64(d, n, kStepField);
+          if (it->second.events)
+            it->second.tracker.on_event(step);
+          else
+            it->second.steps.insert(step);
         } catch (const InputError&) {
         }
       }
@@ -84,6 +98,11 @@ class Monitor {
       ModelStatus s = decode_status(sc_.types, d, n);
       auto it = statuses_.find(s.model);
       if (it == statuses_.end()) return;
+      for (const auto& [ch, count] : s.events) {
+        auto rec = recorded_.find(ch);
+        if (rec != recorded_.end() && rec->second.events && rec->second.producer == s.model)
+          rec->second.tracker.on_count(s.step, count);
+      }
       if (s.step > it->second.step || s.state != it->second.state) last_progress_ = Clock::now();
       if (s.step >= it->second.step) it->second = std::move(s);
       if (!all_started_) {
@@ -153,6 +172,8 @@ class Monitor {
     int64_t next;             // first step not yet logged
     int64_t total;
     std::string producer;
+    bool events = false;   // event-driven: `tracker` instead of steps/next
+    EventTracker tracker;
   };
   const ScenarioConfig& sc_;
   std::unique_ptr<LcmLogWriter> log_;

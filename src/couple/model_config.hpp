@@ -38,6 +38,10 @@ struct Publication {
   std::string channel;
   std::string type;
   std::optional<nlohmann::json> initial;  // published once, stamped step -1, before step 0
+  // Event-driven: a step may publish nothing on this channel (the model leaves the output
+  // empty). Consumers hold the newest event up to the step they need (sample-and-hold) and
+  // learn from the producer's status that they have every event up to a step.
+  bool events = false;
   std::size_t line = 0;
 };
 

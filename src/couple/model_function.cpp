@@ -27,6 +27,7 @@ using nlohmann::json;
 class PluginModel final : public ModelFunction {
  public:
   PluginModel(const ModelConfig& cfg, const fs::path& lib) : name_(cfg.name) {
+    for (const auto& p : cfg.publish) events_.push_back(p.events);  // may stay empty: no event
     handle_ = dlopen(lib.c_str(), RTLD_NOW | RTLD_LOCAL);
     if (!handle_) throw InputError(located(cfg.file, 0, std::string("cannot load plugin: ") + dlerror()));
     auto sym = [&](const char* s) {
@@ -92,12 +93,13 @@ class PluginModel final : public ModelFunction {
     if (rc != 0) throw Failure("model '" + name_ + "' failed at step " + std::to_string(n) + ": " + err);
     if (ctx.bad_index) throw Failure("model '" + name_ + "' emitted an output index beyond its publish list");
     for (std::size_t i = 0; i < outputs.size(); ++i)
-      if (outputs[i].empty())
+      if (outputs[i].empty() && !events_[i])
         throw Failure("model '" + name_ + "' produced no output " + std::to_string(i) + " at step " + std::to_string(n));
   }
 
  private:
   std::string name_;
+  std::vector<bool> events_;
   void* handle_ = nullptr;
   void* (*create_)(const char*, char*, size_t) = nullptr;
   int (*step_)(void*, int64_t, double, const bs_buffer*, size_t, bs_emit_fn, void*, char*, size_t) = nullptr;
@@ -166,6 +168,10 @@ class ExternalModel final : public ModelFunction {
       throw Failure("model '" + cfg_.name + "' failed at step " + std::to_string(n) + ": " + reply["error"].dump());
     for (std::size_t i = 0; i < outputs.size(); ++i) {
       const auto& ch = cfg_.publish[i].channel;
+      outputs[i].clear();
+      // An event-driven channel without an entry (or null) has no event at this step.
+      if (cfg_.publish[i].events && (!reply.contains("outputs") || !reply["outputs"].contains(ch) || reply["outputs"][ch].is_null()))
+        continue;
       if (!reply.contains("outputs") || !reply["outputs"].contains(ch))
         throw Failure("model '" + cfg_.name + "' returned no output for channel '" + ch + "' at step " + std::to_string(n));
       json v = reply["outputs"][ch];
