@@ -112,9 +112,12 @@ class PluginModel final : public ModelFunction {
 };
 
 // JSON lines over the child's stdin/stdout:
-//   -> {"init": PARAMETERS}                       <- {"ok": true}
+//   -> {"init": PARAMETERS}                       <- {"ok": true[, "checkpoint": true]}
 //   -> {"step": N, "t": T, "inputs": {CHANNEL: [newest, ...]}}
 //   <- {"outputs": {CHANNEL: {member: value, ...}}}   or {"error": "message"}
+// and, for a program that said "checkpoint": true, the checkpoint hooks:
+//   -> {"save": true}                             <- {"state": ANY JSON VALUE}
+//   -> {"load": THAT VALUE}                       <- {"ok": true}
 class ExternalModel final : public ModelFunction {
  public:
   ExternalModel(const ModelConfig& cfg, const TypeRegistry& types) : cfg_(cfg) {
@@ -142,6 +145,27 @@ class ExternalModel final : public ModelFunction {
     from_ = fdopen(from_child[0], "r");
     const json reply = call({{"init", cfg.parameters}}, -1);
     if (!reply.value("ok", false)) throw Failure("model '" + cfg.name + "' did not start: " + reply.dump());
+    checkpoints_ = reply.value("checkpoint", false);
+  }
+  bool can_checkpoint() const override { return checkpoints_; }
+  Bytes save() override {
+    const json reply = call({{"save", true}}, -2);
+    if (!reply.contains("state"))
+      throw Failure("model '" + cfg_.name + "' could not save its checkpoint: " +
+                    (reply.contains("error") ? reply["error"].dump() : "no 'state' in its reply " + reply.dump().substr(0, 200)));
+    const std::string text = reply["state"].dump();
+    return Bytes(text.begin(), text.end());
+  }
+  void load(const Bytes& state) override {
+    json value;
+    try {
+      value = json::parse(state.begin(), state.end());
+    } catch (const json::exception& e) {
+      throw Failure("model '" + cfg_.name + "': its checkpoint is not JSON: " + e.what());
+    }
+    const json reply = call({{"load", std::move(value)}}, -2);
+    if (!reply.value("ok", false))
+      throw Failure("model '" + cfg_.name + "' could not load its checkpoint: " + reply.dump().substr(0, 200));
   }
   ~ExternalModel() override {
     if (to_) std::fclose(to_);
@@ -198,7 +222,9 @@ class ExternalModel final : public ModelFunction {
       usleep(5000);
     }
     throw Failure("model '" + cfg_.name + "' (external program " + cfg_.command[0] + ") " + how +
-                  (n < 0 ? std::string(" while starting") : " at step " + std::to_string(n)));
+                  (n == -1   ? std::string(" while starting")
+                   : n == -2 ? std::string(" while saving or loading its checkpoint")
+                             : " at step " + std::to_string(n)));
   }
   json call(const json& req, int64_t n) {
     const std::string line = req.dump() + "\n";
@@ -214,6 +240,7 @@ class ExternalModel final : public ModelFunction {
     }
   }
   ModelConfig cfg_;
+  bool checkpoints_ = false;
   std::vector<LcmCodec> in_codecs_, out_codecs_;
   pid_t pid_ = -1;
   FILE* to_ = nullptr;
