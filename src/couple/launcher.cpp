@@ -274,6 +274,20 @@ std::string local_input(const ScenarioConfig& sc, const std::string& model) {
   return "";
 }
 
+// The models to restart when `model` dies: itself, or, when it reads a local channel, its
+// whole group (every member must run under this launcher); empty when that is impossible.
+std::vector<std::string> restart_group(const ScenarioConfig& sc, const std::string& model,
+                                       const std::vector<std::string>& only) {
+  if (local_input(sc, model).empty()) return {model};
+  std::vector<std::string> group;
+  for (const auto& m : sc.models) {
+    if (m.group != sc.model(model).group) continue;
+    if (!only.empty() && std::find(only.begin(), only.end(), m.name) == only.end()) return {};
+    group.push_back(m.name);
+  }
+  return group;
+}
+
 LaunchResult launch_processes(const ScenarioConfig& sc, const LaunchOptions& opt, NatsServer* server,
                               bool recovery) {
   auto tr = make_transport(sc.transport);
@@ -315,15 +329,29 @@ LaunchResult launch_processes(const ScenarioConfig& sc, const LaunchOptions& opt
       if (it == children.end()) continue;
       const std::string model = it->second;
       // A process that died by a signal (kill -9, a crash) is restarted while the run goes
-      // on; it replays its inputs from the mediator's history.
-      if (recovery && !block && failure.empty() && !stop_flag() && WIFSIGNALED(status) &&
-          restarts[model] < opt.max_restarts && local_input(sc, model).empty()) {
-        ++restarts[model];
-        spdlog::warn("couple: model '{}' {} at step {}; restarting it (attempt {}), it resumes from the mediator's history",
-                     model, describe_exit(status), mon.statuses().at(model).step, restarts[model]);
+      // on; it replays its inputs from the mediator's history. One that reads a local
+      // channel (LCM, no history) is restarted with its whole group, here, so the group's
+      // producers re-send those steps.
+      const std::vector<std::string> group = restart_group(sc, model, opt.only);
+      if (recovery && !block && failure.empty() && !stop_flag() && WIFSIGNALED(status) && !group.empty() &&
+          restarts[model] < opt.max_restarts) {
+        spdlog::warn("couple: model '{}' {} at step {}; restarting {} (attempt {}), resuming from the mediator's history",
+                     model, describe_exit(status), mon.statuses().at(model).step,
+                     group.size() == 1 ? "it" : "its group '" + sc.model(model).group + "'", restarts[model] + 1);
         children.erase(it);
+        for (const auto& peer : group) {
+          for (auto c = children.begin(); c != children.end(); ++c)
+            if (c->second == peer) {
+              ::kill(c->first, SIGKILL);
+              ::waitpid(c->first, nullptr, 0);
+              children.erase(c);
+              break;
+            }
+          exit_status.erase(peer);
+          ++restarts[peer];
+          spawn(peer, true);
+        }
         mon.touch();
-        spawn(model, true);
         continue;
       }
       exit_status[it->second] = status;
@@ -332,9 +360,9 @@ LaunchResult launch_processes(const ScenarioConfig& sc, const LaunchOptions& opt
         auto why = mon.failure();
         failure = why ? *why : "model '" + it->second + "' " + describe_exit(status) + " at step " +
                                    std::to_string(mon.statuses().at(it->second).step);
-        if (recovery && WIFSIGNALED(status) && !local_input(sc, model).empty())
+        if (recovery && WIFSIGNALED(status) && group.empty())
           failure += " (not restarted: it reads the local channel '" + local_input(sc, model) +
-                     "', LCM within its group, which keeps no history)";
+                     "', LCM within its group, and not every model of the group runs here to restart with it)";
       }
       children.erase(it);
       if (children.empty()) break;
@@ -410,9 +438,10 @@ LaunchResult launch(const ScenarioConfig& scenario, const LaunchOptions& opt) {
   install_stop_signals();
   for (const auto& [m, step] : opt.kills) {
     scenario.model(m);  // InputError naming an unknown model
-    if (const std::string ch = local_input(scenario, m); !ch.empty())
-      throw InputError("--kill " + m + "@" + std::to_string(step) + ": model '" + m + "' reads the local channel '" + ch +
-                       "' (LCM within its group, no history), so it cannot resume after a kill");
+    if (restart_group(scenario, m, opt.only).empty())
+      throw InputError("--kill " + m + "@" + std::to_string(step) + ": model '" + m + "' reads the local channel '" +
+                       local_input(scenario, m) + "' (LCM, no history) and not every model of its group '" +
+                       scenario.model(m).group + "' runs under this launcher (--only) to restart with it");
     if (step < 0 || step >= scenario.model(m).steps())
       throw InputError("--kill " + m + "@" + std::to_string(step) + ": the step must be in 0.." +
                        std::to_string(scenario.model(m).steps() - 1));

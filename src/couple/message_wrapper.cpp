@@ -288,7 +288,10 @@ struct MessageWrapper::Impl {
       if (bytes.empty()) return;  // no event at this step
       ++out.events;
     }
-    if (step > out.published_before) tr.publish(out.pub->channel, bytes.data(), bytes.size());
+    if (step > out.published_before)
+      tr.publish(out.pub->channel, bytes.data(), bytes.size());
+    else
+      tr.publish_within_group(out.pub->channel, bytes.data(), bytes.size());  // its peers re-run too
     out.last = step;
     for (auto& in : inputs)
       if (in.self && in.sub->channel == out.pub->channel) in.buffer.emplace(step, bytes);
