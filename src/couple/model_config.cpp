@@ -237,13 +237,14 @@ ModelConfig load_model_config(const fs::path& file) {
 ScenarioConfig load_scenario(const fs::path& file_in) {
   const fs::path file = fs::absolute(file_in).lexically_normal();
   const YAML::Node root = load_yaml(file);
-  check_keys(file, root, {"name", "transport", "timeout", "messages", "models", "local"}, "");
+  check_keys(file, root, {"name", "transport", "timeout", "messages", "models", "local", "models_per_process"}, "");
   ScenarioConfig sc;
   sc.file = file;
   sc.name = get_or<std::string>(file, root, "name", "", file.stem().string());
   sc.transport = get_or<std::string>(file, root, "transport", "", sc.transport);
   sc.timeout_seconds = get_or<double>(file, root, "timeout", "", sc.timeout_seconds);
   if (!(sc.timeout_seconds > 0)) bad(file, root["timeout"], "field 'timeout' must be positive (seconds)");
+  sc.models_per_process = positive(file, root, "models_per_process", "", 1);
   sc.messages = message_files(file, root);
   const YAML::Node models = root["models"];
   if (!models || !models.IsSequence() || models.size() == 0) bad(file, root, "field 'models' must be a non-empty list");

@@ -74,6 +74,9 @@ struct ScenarioConfig {
   std::string name;
   std::string transport = "udpm://239.255.76.67:7667?ttl=0";
   double timeout_seconds = 10;  // no model advancing for this long fails the run
+  // `couple launch` over processes: consecutive models hosted per process (one wrapper
+  // thread each), so a scenario of hundreds of models runs on a small machine.
+  int models_per_process = 1;
   std::vector<std::filesystem::path> messages;
   std::vector<ModelConfig> models;
   TypeRegistry types;  // every .lcm file of the scenario and its models
