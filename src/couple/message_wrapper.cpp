@@ -49,6 +49,7 @@ struct MessageWrapper::Impl {
     // status goes out as soon as we have completed it (the consumer cannot tell a lost
     // event from a step without one, and the periodic status would make it wait).
     int64_t awaits = std::numeric_limits<int64_t>::max();
+    bool heard = false;  // it has reported at least once (it runs)
   };
   struct Output {
     const Publication* pub;
@@ -167,6 +168,7 @@ struct MessageWrapper::Impl {
     for (auto& out : outputs) {
       for (auto& c : out.consumers) {
         if (c.model != s.model) continue;
+        c.heard = true;
         if (s.state == ModelState::kDone) c.done = true;
         for (const auto& [ch, step] : s.needs)
           if (ch == out.pub->channel) c.need = std::max(c.need, step);
@@ -347,6 +349,13 @@ struct MessageWrapper::Impl {
     return true;
   }
 
+  bool consumers_heard() const {
+    for (const auto& out : outputs)
+      for (const auto& c : out.consumers)
+        if (!c.heard && !c.done) return false;
+    return true;
+  }
+
   bool stop_requested() const { return opt.stop && opt.stop->load(); }
 
   bool checkpointing() const { return cfg.checkpoint_every > 0 && fn->can_checkpoint() && tr.keeps_history(); }
@@ -423,6 +432,10 @@ struct MessageWrapper::Impl {
           send_status(ModelState::kDone, nullptr);
         }
         if (consumers_done()) return;
+        // A consumer that has not started yet (hundreds of processes start slowly) still
+        // needs everything: the linger time counts only once every consumer has reported
+        // (the launcher fails a run whose model never reports).
+        if (!consumers_heard()) finished = Clock::now();
         if (Clock::now() - finished > std::chrono::duration<double>(opt.linger_seconds)) {
           spdlog::warn("{}: finished, but not every consumer confirmed it got the last steps", cfg.name);
           return;
