@@ -13,6 +13,9 @@
 # CPU seconds (mediator_cpu_seconds) and the CPU seconds of every process of the run.
 # Runs in a private network namespace (root) with a loopback multicast route.
 #   BUILDINGS="2 5 10" STEPS=2000 RUNS=1 bash bench/couple_scale.sh  -> bench-out/couple_scale.json
+# MODELS_PER_PROCESS=3 hosts three consecutive models per process (one building; the
+# scenarios' models_per_process), a wrapper thread each: N + 1 processes instead of 3N + 1.
+# PLATFORMS="lcm mediator hybrid" chooses the platforms.
 # (RUN_TIMEOUT=600: a launch still running after that many seconds is stopped and left out.)
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -23,17 +26,20 @@ BIN=$PWD/build/release/apps/builtscene/builtscene
 EXAMPLE=$PWD/examples/coupling/wind-structure-control
 OUT=$PWD/bench-out/couple_scale
 mkdir -p "$OUT"
+export MODELS_PER_PROCESS=${MODELS_PER_PROCESS:-1} PLATFORMS=${PLATFORMS:-"lcm mediator hybrid"}
 unshare -n bash -s "$BUILDINGS" "$STEPS" "$RUNS" "$BIN" "$EXAMPLE" "$OUT" <<'INNER'
 set -euo pipefail
 BUILDINGS=$1 STEPS=$2 RUNS=$3 BIN=$4 EXAMPLE=$5 OUT=$6
 ip link set lo up
 ip route add 224.0.0.0/4 dev lo
 python3 - "$BUILDINGS" "$STEPS" "$RUNS" "$BIN" "$EXAMPLE" "$OUT" <<'PY'
-import json, os, resource, statistics, subprocess, sys, time
+import json, math, os, resource, signal, statistics, subprocess, sys, time
 buildings, steps, runs = [int(b) for b in sys.argv[1].split()], int(sys.argv[2]), int(sys.argv[3])
 limit = int(os.environ.get("RUN_TIMEOUT", "600"))  # seconds per launch
 bin_, example, out = sys.argv[4], sys.argv[5], sys.argv[6]
 end_time = steps * 0.01
+per_process = int(os.environ.get("MODELS_PER_PROCESS", "1"))
+platforms = os.environ.get("PLATFORMS", "lcm mediator hybrid").split()
 
 def scenario_dir(n):
     d = os.path.join(out, f"N{n}")
@@ -61,7 +67,7 @@ def scenario_dir(n):
     grouped = "".join(f"  - {{config: wind_{i}.yaml, group: b{i}}}\n  - {{config: structure_{i}.yaml, group: b{i}}}\n"
                       f"  - {{config: controller_{i}.yaml, group: b{i}}}\n" for i in range(n)) + "  - district.yaml\n"
     local = ", ".join(f"WIND_{i}, STRUCTURE_{i}, CONTROL_{i}" for i in range(n))
-    common = f"timeout: 60\n"
+    common = f"timeout: 60\nmodels_per_process: {per_process}\n"
     open(f"{d}/scenario-lcm.yaml", "w").write(f"name: district-{n}-lcm\ntransport: udpm://239.255.76.67:7667?ttl=0\n{common}models:\n{plain}")
     open(f"{d}/scenario-mediator.yaml", "w").write(f"name: district-{n}-mediator\ntransport: mediator\n{common}models:\n{plain}")
     open(f"{d}/scenario-hybrid.yaml", "w").write(
@@ -76,17 +82,26 @@ def cpu_children():
 rows = []
 for n in buildings:
     d = scenario_dir(n)
-    for platform in ("lcm", "mediator", "hybrid"):
+    for platform in platforms:
         sps, med, cpu = [], [], []
         for _ in range(runs):
             before = cpu_children()
             env = dict(os.environ, TMPDIR=d)
+            p = subprocess.Popen([bin_, "couple", "launch", f"{d}/scenario-{platform}.yaml", "--json"],
+                                 stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
             try:
-                p = subprocess.run([bin_, "couple", "launch", f"{d}/scenario-{platform}.yaml", "--json"],
-                                   capture_output=True, text=True, env=env, timeout=limit)
+                stdout, stderr = p.communicate(timeout=limit)
             except subprocess.TimeoutExpired:
+                # Ctrl-C: the launcher stops its models and nats-server (a kill would orphan them).
+                p.send_signal(signal.SIGINT)
+                try:
+                    p.communicate(timeout=30)
+                except subprocess.TimeoutExpired:
+                    p.kill()
+                    p.communicate()
                 print(f"N={n} {platform}: not finished in {limit} s (stopped)", file=sys.stderr)
                 continue
+            p.stdout, p.stderr = stdout, stderr
             if p.returncode != 0:
                 print(f"N={n} {platform}: failed: {p.stderr.strip().splitlines()[-1:]}", file=sys.stderr)
                 continue
@@ -94,7 +109,7 @@ for n in buildings:
             sps.append(j["steps_per_second"])
             med.append(j.get("mediator_cpu_seconds"))
             cpu.append(cpu_children() - before)
-        row = {"buildings": n, "processes": 3 * n + 1, "platform": platform, "steps": steps, "runs": len(sps),
+        row = {"buildings": n, "models": 3 * n + 1, "processes": math.ceil((3 * n + 1) / per_process), "platform": platform, "steps": steps, "runs": len(sps),
                "steps_per_second": statistics.median(sps) if sps else None,
                "mediator_cpu_seconds": statistics.median(med) if med and med[0] is not None else None,
                "all_processes_cpu_seconds": statistics.median(cpu) if cpu else None,
@@ -102,11 +117,11 @@ for n in buildings:
         rows.append(row)
         print(json.dumps(row), flush=True)
 json.dump(rows, open(os.path.join(out, "..", "couple_scale.json"), "w"), indent=2)
-print("| buildings | model processes | platform | steps/s | nats-server CPU [s] | CPU of all processes [s] | load avg |")
-print("| --- | --- | --- | --- | --- | --- | --- |")
+print("| buildings | models | model processes | platform | steps/s | nats-server CPU [s] | CPU of all processes [s] | load avg |")
+print("| --- | --- | --- | --- | --- | --- | --- | --- |")
 for r in rows:
     f = lambda v, fmt: "-" if v is None else format(v, fmt)
-    print(f"| {r['buildings']} | {r['processes']} | {r['platform']} | {f(r['steps_per_second'], '.0f')} | "
+    print(f"| {r['buildings']} | {r['models']} | {r['processes']} | {r['platform']} | {f(r['steps_per_second'], '.0f')} | "
           f"{f(r['mediator_cpu_seconds'], '.2f')} | {f(r['all_processes_cpu_seconds'], '.1f')} | {r['load_average']:.1f} |")
 PY
 INNER

@@ -61,6 +61,7 @@ struct LaunchCliOptions {
   fs::path scenario, record;
   std::string transport, nats;
   std::vector<std::string> kills, only;
+  int models_per_process = 0;
 };
 
 const bool launch_cmd = register_command({
@@ -77,6 +78,10 @@ const bool launch_cmd = register_command({
       cmd.add_option("--kill", o->kills,
                      "Fault injection: SIGKILL MODEL's process at STEP (MODEL@STEP, repeatable); the launcher "
                      "restarts it and it resumes from the mediator's history");
+      cmd.add_option("--models-per-process", o->models_per_process,
+                     "Host this many consecutive models per process, a wrapper thread each (default: the "
+                     "scenario's models_per_process, 1)")
+          ->check(CLI::PositiveNumber);
       cmd.add_option("--only", o->only,
                      "Several hosts: start only this model here (repeatable); the others run on other hosts "
                      "under their own `couple launch --only ...` with the same --nats");
@@ -93,6 +98,7 @@ const bool launch_cmd = register_command({
         LaunchOptions lo;
         lo.nats = o->nats;
         lo.only = o->only;
+        lo.models_per_process = o->models_per_process;
         for (const auto& k : o->kills) {
           const auto at = k.rfind('@');
           int64_t step = -1;
@@ -121,9 +127,10 @@ const bool launch_cmd = register_command({
 
 struct RunModelOptions {
   fs::path scenario;
-  std::string model, transport;
+  std::vector<std::string> models;
+  std::string transport;
   bool recorder = false, resume = false;
-  int64_t kill_at = -1;
+  std::vector<std::string> kill_at;
 };
 
 const bool run_model = register_command({
@@ -132,15 +139,31 @@ const bool run_model = register_command({
     .setup = [](CLI::App& cmd) -> Action {
       auto o = std::make_shared<RunModelOptions>();
       cmd.add_option("scenario", o->scenario, "Scenario (YAML)")->required();
-      cmd.add_option("--model", o->model, "Model name")->required();
+      cmd.add_option("--model", o->models, "Model name (repeat: several models in this process, a thread each)")->required();
       cmd.add_option("--transport", o->transport, "Transport URL (default: the scenario's)");
       cmd.add_flag("--recorder", o->recorder, "The launcher records: re-send lost messages to it too");
       cmd.add_flag("--resume", o->resume, "Restarted after a crash: replay the inputs' history from the mediator");
-      cmd.add_option("--kill-at", o->kill_at, "Fault injection: SIGKILL this process at this step");
+      cmd.add_option("--kill-at", o->kill_at,
+                     "Fault injection: SIGKILL this process when MODEL reaches STEP (MODEL@STEP, or STEP with one --model)");
       return [o] {
-        const int rc = run_model_process(o->scenario, o->model, o->transport, o->recorder, o->resume, o->kill_at);
-        if (rc != 0) throw Failure("model '" + o->model + "' stopped");
-        return json{{"model", o->model}};
+        std::map<std::string, int64_t> kill_at;
+        for (const auto& k : o->kill_at) {
+          const auto at = k.rfind('@');
+          const std::string model = at == std::string::npos ? (o->models.size() == 1 ? o->models[0] : "") : k.substr(0, at);
+          try {
+            std::size_t used = 0;
+            const std::string step = at == std::string::npos ? k : k.substr(at + 1);
+            kill_at[model] = std::stoll(step, &used);
+            if (used != step.size() || model.empty()) throw std::invalid_argument(k);
+          } catch (const std::exception&) {
+            throw InputError("--kill-at '" + k + "': expected MODEL@STEP (or STEP with a single --model)");
+          }
+        }
+        const int rc = run_model_process(o->scenario, o->models, o->transport, o->recorder, o->resume, kill_at);
+        std::string names;
+        for (const auto& m : o->models) names += (names.empty() ? "" : ", ") + m;
+        if (rc != 0) throw Failure("model(s) " + names + " stopped");
+        return json{{"models", o->models}};
       };
     },
     .order = 90});

@@ -54,10 +54,15 @@ class HybridTransport final : public Transport {
 
   bool keeps_history() const override { return mediator_->keeps_history(); }
   void subscribe_from_start(const std::string& channel, Handler handler) override {
+    // LCM keeps no history: the launcher restarts the whole group, whose producers re-run
+    // from their start and re-send the local steps (publish_within_group).
     if (receive_local_.count(channel))
-      throw Failure("channel '" + channel + "' is local (LCM, " + local_->url() +
-                    "): it keeps no history to resume from");
-    mediator_->subscribe_from_start(channel, std::move(handler));
+      local_->subscribe(channel, std::move(handler));
+    else
+      mediator_->subscribe_from_start(channel, std::move(handler));
+  }
+  void publish_within_group(const std::string& channel, const uint8_t* data, std::size_t size) override {
+    if (publish_local_.count(channel)) local_->publish(channel, data, size);
   }
   std::vector<uint8_t> last_stored(const std::string& channel) override { return mediator_->last_stored(channel); }
 

@@ -14,6 +14,7 @@
 
 #include "core/errors.hpp"
 #include "core/logging.hpp"
+#include "couple/event_tracker.hpp"
 #include "couple/lcm_codec.hpp"
 #include "couple/hybrid_transport.hpp"
 #include "couple/lcm_log.hpp"
@@ -41,7 +42,8 @@ class Monitor {
       statuses_[m.name].steps = m.steps();
       if (log_)
         for (const auto& p : m.publish)
-          recorded_.emplace(p.channel, Recorded{LcmCodec(sc.types, p.type), {}, p.initial ? -1 : 0, m.steps(), m.name});
+          recorded_.emplace(p.channel, Recorded{LcmCodec(sc.types, p.type), {}, p.initial ? -1 : 0, m.steps(), m.name,
+                                                p.events, EventTracker(p.initial ? -1 : 0)});
     }
     last_progress_ = Clock::now();
   }
@@ -56,6 +58,14 @@ class Monitor {
     s.utime = now_us();
     bool complete = true;
     for (auto& [ch, r] : recorded_) {
+      if (r.events) {
+        // Event-driven: complete up to where the producer's counts say; ask for the rest.
+        const int64_t done = r.tracker.complete();
+        if (done < r.total) complete = false;
+        s.needs.emplace_back(ch, done >= r.total ? std::numeric_limits<int64_t>::max() : done);
+        if (done < r.total && statuses_.at(r.producer).step > done) s.waiting.emplace_back(ch, done);
+        continue;
+      }
       while (r.steps.count(r.next)) r.steps.erase(r.next++);
       if (r.next < r.total) complete = false;
       s.needs.emplace_back(ch, r.next >= r.total ? std::numeric_limits<int64_t>::max() : r.next);
@@ -74,7 +84,11 @@ class Monitor {
       auto it = recorded_.find(ch);
       if (it != recorded_.end()) {
         try {
-          it->second.steps.insert(it->second.codec.read_int64(d, n, kStepField));
+          const int64_t step = it->second.codec.read_int64(d, n, kStepField);
+          if (it->second.events)
+            it->second.tracker.on_event(step);
+          else
+            it->second.steps.insert(step);
         } catch (const InputError&) {
         }
       }
@@ -84,6 +98,11 @@ class Monitor {
       ModelStatus s = decode_status(sc_.types, d, n);
       auto it = statuses_.find(s.model);
       if (it == statuses_.end()) return;
+      for (const auto& [ch, count] : s.events) {
+        auto rec = recorded_.find(ch);
+        if (rec != recorded_.end() && rec->second.events && rec->second.producer == s.model)
+          rec->second.tracker.on_count(s.step, count);
+      }
       if (s.step > it->second.step || s.state != it->second.state) last_progress_ = Clock::now();
       if (s.step >= it->second.step) it->second = std::move(s);
       if (!all_started_) {
@@ -153,6 +172,8 @@ class Monitor {
     int64_t next;             // first step not yet logged
     int64_t total;
     std::string producer;
+    bool events = false;   // event-driven: `tracker` instead of steps/next
+    EventTracker tracker;
   };
   const ScenarioConfig& sc_;
   std::unique_ptr<LcmLogWriter> log_;
@@ -253,21 +274,38 @@ std::string local_input(const ScenarioConfig& sc, const std::string& model) {
   return "";
 }
 
+// The models to restart when `model` dies: itself, or, when it reads a local channel, its
+// whole group (every member must run under this launcher); empty when that is impossible.
+std::vector<std::string> restart_group(const ScenarioConfig& sc, const std::string& model,
+                                       const std::vector<std::string>& only) {
+  if (local_input(sc, model).empty()) return {model};
+  std::vector<std::string> group;
+  for (const auto& m : sc.models) {
+    if (m.group != sc.model(model).group) continue;
+    if (!only.empty() && std::find(only.begin(), only.end(), m.name) == only.end()) return {};
+    group.push_back(m.name);
+  }
+  return group;
+}
+
 LaunchResult launch_processes(const ScenarioConfig& sc, const LaunchOptions& opt, NatsServer* server,
                               bool recovery) {
   auto tr = make_transport(sc.transport);
   Monitor mon(sc, *tr, opt.record);
   std::filesystem::path exe = opt.executable.empty() ? std::filesystem::read_symlink("/proc/self/exe") : opt.executable;
   const std::string scenario = std::filesystem::absolute(opt.scenario_file.empty() ? sc.file : opt.scenario_file);
-  std::map<pid_t, std::string> children;
+  // Each process hosts one model, or `models_per_process` consecutive ones (one wrapper
+  // thread each): pid -> its models.
+  std::map<pid_t, std::vector<std::string>> children;
   const auto start = Clock::now();
-  auto spawn = [&](const std::string& model, bool resume) {
-    std::vector<std::string> args = {exe.string(), "couple", "run-model", scenario, "--model", model,
-                                     "--transport", sc.transport};
+  auto spawn = [&](const std::vector<std::string>& models, bool resume) {
+    std::vector<std::string> args = {exe.string(), "couple", "run-model", scenario, "--transport", sc.transport};
+    for (const auto& m : models) args.insert(args.end(), {"--model", m});
     if (!opt.record.empty()) args.push_back("--recorder");
     if (resume) args.push_back("--resume");
     for (const auto& [m, step] : opt.kills)
-      if (m == model && !resume) args.insert(args.end(), {"--kill-at", std::to_string(step)});
+      if (!resume && std::find(models.begin(), models.end(), m) != models.end())
+        args.insert(args.end(), {"--kill-at", m + "@" + std::to_string(step)});
     std::vector<char*> argv;
     for (auto& a : args) argv.push_back(a.data());
     argv.push_back(nullptr);
@@ -278,12 +316,19 @@ LaunchResult launch_processes(const ScenarioConfig& sc, const LaunchOptions& opt
       std::fprintf(stderr, "cannot run %s: %s\n", exe.c_str(), std::strerror(errno));
       _exit(127);
     }
-    children[pid] = model;
+    children[pid] = models;
   };
-  for (const auto& m : sc.models)
-    if (opt.only.empty() || std::find(opt.only.begin(), opt.only.end(), m.name) != opt.only.end()) spawn(m.name, false);
+  {
+    std::vector<std::string> ours;
+    for (const auto& m : sc.models)
+      if (opt.only.empty() || std::find(opt.only.begin(), opt.only.end(), m.name) != opt.only.end()) ours.push_back(m.name);
+    const std::size_t per =
+        static_cast<std::size_t>(std::max(1, opt.models_per_process > 0 ? opt.models_per_process : sc.models_per_process));
+    for (std::size_t i = 0; i < ours.size(); i += per)
+      spawn(std::vector<std::string>(ours.begin() + i, ours.begin() + std::min(ours.size(), i + per)), false);
+  }
   std::string failure;
-  std::map<std::string, int> exit_status, restarts;
+  std::map<std::string, int> restarts;
   auto reap = [&](bool block) {
     int status = 0;
     pid_t pid;
@@ -292,28 +337,76 @@ LaunchResult launch_processes(const ScenarioConfig& sc, const LaunchOptions& opt
         failure = "the mediator (nats-server) " + describe_exit(status);
       auto it = children.find(pid);
       if (it == children.end()) continue;
-      const std::string model = it->second;
+      const std::vector<std::string> models = it->second;
+      const std::string& model = models.front();
       // A process that died by a signal (kill -9, a crash) is restarted while the run goes
-      // on; it replays its inputs from the mediator's history.
-      if (recovery && !block && failure.empty() && !stop_flag() && WIFSIGNALED(status) &&
-          restarts[model] < opt.max_restarts && local_input(sc, model).empty()) {
-        ++restarts[model];
-        spdlog::warn("couple: model '{}' {} at step {}; restarting it (attempt {}), it resumes from the mediator's history",
-                     model, describe_exit(status), mon.statuses().at(model).step, restarts[model]);
+      // on; its models replay their inputs from the mediator's history. One that reads a
+      // local channel (LCM, no history) is restarted with its whole group, here, so the
+      // group's producers re-send those steps; a process hosting a restarted model is
+      // restarted whole.
+      std::set<std::string> restart;
+      bool possible = true;
+      std::string not_restartable;
+      for (const auto& m : models) {
+        const auto g = restart_group(sc, m, opt.only);
+        if (g.empty()) {
+          possible = false;
+          not_restartable = m;
+        }
+        restart.insert(g.begin(), g.end());
+      }
+      std::vector<std::vector<std::string>> respawn = {models};
+      if (recovery && !block && failure.empty() && !stop_flag() && WIFSIGNALED(status) && possible &&
+          restarts[model] < opt.max_restarts) {
         children.erase(it);
+        std::set<std::string> covered(models.begin(), models.end());
+        for (bool grew = true; grew;) {  // whole processes, whole groups
+          grew = false;
+          for (auto c = children.begin(); c != children.end();) {
+            bool hit = false;
+            for (const auto& m : c->second) hit = hit || restart.count(m);
+            if (!hit) {
+              ++c;
+              continue;
+            }
+            ::kill(c->first, SIGKILL);
+            ::waitpid(c->first, nullptr, 0);
+            for (const auto& m : c->second) {
+              covered.insert(m);
+              if (restart.insert(m).second) grew = true;
+              for (const auto& g : restart_group(sc, m, opt.only))
+                if (restart.insert(g).second) grew = true;
+            }
+            respawn.push_back(c->second);
+            c = children.erase(c);
+          }
+        }
+        for (const auto& m : restart)  // a group member whose process had already finished
+          if (!covered.count(m)) respawn.push_back({m});
+        std::string who = "model '" + model + "'";
+        for (std::size_t i = 1; i < models.size(); ++i) who += (i == 1 ? " (its process also hosts '" : ", '") + models[i] + "'";
+        if (models.size() > 1) who += ")";
+        spdlog::warn("couple: {} {} at step {}; restarting {} (attempt {}), resuming from the mediator's history",
+                     who, describe_exit(status), mon.statuses().at(model).step,
+                     restart.size() == 1 ? std::string("it") : fmt::format("{} models with it", restart.size() - 1),
+                     restarts[model] + 1);
+        if (!sc.model(model).group.empty() && restart.size() > 1)
+          spdlog::warn("couple: restarting its group '{}'", sc.model(model).group);
+        for (const auto& list : respawn) {
+          for (const auto& m : list) ++restarts[m];
+          spawn(list, true);
+        }
         mon.touch();
-        spawn(model, true);
         continue;
       }
-      exit_status[it->second] = status;
       if (failure.empty() && !(WIFEXITED(status) && WEXITSTATUS(status) == 0) && !stop_flag()) {
         tr->handle(0);  // pick up its last status (the model's own error message)
         auto why = mon.failure();
-        failure = why ? *why : "model '" + it->second + "' " + describe_exit(status) + " at step " +
-                                   std::to_string(mon.statuses().at(it->second).step);
-        if (recovery && WIFSIGNALED(status) && !local_input(sc, model).empty())
-          failure += " (not restarted: it reads the local channel '" + local_input(sc, model) +
-                     "', LCM within its group, which keeps no history)";
+        failure = why ? *why : "model '" + model + "' " + describe_exit(status) + " at step " +
+                                   std::to_string(mon.statuses().at(model).step);
+        if (recovery && WIFSIGNALED(status) && !possible)
+          failure += " (not restarted: '" + not_restartable + "' reads the local channel '" + local_input(sc, not_restartable) +
+                     "', LCM within its group, and not every model of the group runs here to restart with it)";
       }
       children.erase(it);
       if (children.empty()) break;
@@ -389,9 +482,10 @@ LaunchResult launch(const ScenarioConfig& scenario, const LaunchOptions& opt) {
   install_stop_signals();
   for (const auto& [m, step] : opt.kills) {
     scenario.model(m);  // InputError naming an unknown model
-    if (const std::string ch = local_input(scenario, m); !ch.empty())
-      throw InputError("--kill " + m + "@" + std::to_string(step) + ": model '" + m + "' reads the local channel '" + ch +
-                       "' (LCM within its group, no history), so it cannot resume after a kill");
+    if (restart_group(scenario, m, opt.only).empty())
+      throw InputError("--kill " + m + "@" + std::to_string(step) + ": model '" + m + "' reads the local channel '" +
+                       local_input(scenario, m) + "' (LCM, no history) and not every model of its group '" +
+                       scenario.model(m).group + "' runs under this launcher (--only) to restart with it");
     if (step < 0 || step >= scenario.model(m).steps())
       throw InputError("--kill " + m + "@" + std::to_string(step) + ": the step must be in 0.." +
                        std::to_string(scenario.model(m).steps() - 1));
@@ -437,22 +531,57 @@ LaunchResult launch(const ScenarioConfig& scenario, const LaunchOptions& opt) {
   return r;
 }
 
-int run_model_process(const std::filesystem::path& scenario_file, const std::string& model,
-                      const std::string& transport, bool recorder, bool resume, int64_t kill_at) {
+int run_model_process(const std::filesystem::path& scenario_file, const std::vector<std::string>& models,
+                      const std::string& transport, bool recorder, bool resume,
+                      const std::map<std::string, int64_t>& kill_at) {
   install_stop_signals();
   const ScenarioConfig sc = load_scenario(scenario_file);
-  const ModelConfig& cfg = sc.model(model);
-  const std::string url = !transport.empty() ? transport : cfg.transport.empty() ? sc.transport : cfg.transport;
-  auto tr = make_model_transport(sc, model, url, recorder);
-  WrapperOptions wo;
-  wo.stop = &stop_flag();
-  wo.linger_seconds = sc.timeout_seconds;
-  wo.recorder = recorder;
-  wo.resume = resume;
-  wo.kill_at = kill_at;
-  MessageWrapper w(sc, model, *tr, load_model_function(cfg, sc.types), wo);
-  w.run();
-  return w.stopped() ? 130 : 0;
+  // One wrapper (own transport, own thread) per model; each blocks in its transport, so
+  // many models share a process and its cores without busy-waiting.
+  std::atomic<bool> stop{false};
+  const std::atomic<bool>* stop_ptr = models.size() == 1 ? &stop_flag() : &stop;
+  std::vector<std::unique_ptr<Transport>> transports;
+  std::vector<std::unique_ptr<MessageWrapper>> wrappers;
+  for (const auto& model : models) {
+    const ModelConfig& cfg = sc.model(model);
+    const std::string url = !transport.empty() ? transport : cfg.transport.empty() ? sc.transport : cfg.transport;
+    transports.push_back(make_model_transport(sc, model, url, recorder));
+    WrapperOptions wo;
+    wo.stop = stop_ptr;
+    wo.linger_seconds = sc.timeout_seconds;
+    wo.recorder = recorder;
+    wo.resume = resume;
+    if (auto k = kill_at.find(model); k != kill_at.end()) wo.kill_at = k->second;
+    wrappers.push_back(std::make_unique<MessageWrapper>(sc, model, *transports.back(), load_model_function(cfg, sc.types), wo));
+  }
+  if (wrappers.size() == 1) {
+    wrappers[0]->run();
+    return wrappers[0]->stopped() ? 130 : 0;
+  }
+  std::mutex m;
+  std::string first_error;
+  std::atomic<int> running{static_cast<int>(wrappers.size())};
+  std::vector<std::thread> threads;
+  for (auto& w : wrappers)
+    threads.emplace_back([&, wp = w.get()] {
+      try {
+        wp->run();
+      } catch (const std::exception& e) {
+        std::lock_guard lock(m);
+        if (first_error.empty()) first_error = e.what();
+        stop = true;  // one failed model stops the process's others (the launcher stops the run)
+      }
+      --running;
+    });
+  while (running > 0) {
+    if (stop_flag()) stop = true;
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  for (auto& t : threads) t.join();
+  if (!first_error.empty()) throw Failure(first_error);
+  for (const auto& w : wrappers)
+    if (w->stopped()) return 130;
+  return 0;
 }
 
 }  // namespace builtscene::couple

@@ -33,6 +33,9 @@ struct LaunchOptions {
   std::vector<std::string> only;
   int64_t history_per_channel = 1000000;  // JetStream: messages kept per channel
   int max_restarts = 3;                   // per model
+  // Processes (udpm, mediator): host this many consecutive models of the scenario per
+  // process, one wrapper thread each (`--models-per-process`, scenario `models_per_process`).
+  int models_per_process = 0;  // 0: the scenario's (default 1)
 };
 
 struct LaunchResult {
@@ -54,9 +57,10 @@ LaunchResult launch(const ScenarioConfig& scenario, const LaunchOptions& options
 
 // The body of one model process (`builtscene couple run-model`): returns the exit code.
 // `transport` overrides the scenario's (the launcher passes its own).
-int run_model_process(const std::filesystem::path& scenario_file, const std::string& model,
+// Several models: one wrapper thread each. kill_at: fault injection, model -> step.
+int run_model_process(const std::filesystem::path& scenario_file, const std::vector<std::string>& models,
                       const std::string& transport = "", bool recorder = false, bool resume = false,
-                      int64_t kill_at = -1);
+                      const std::map<std::string, int64_t>& kill_at = {});
 
 // SIGINT/SIGTERM set this; wrappers and the launcher poll it.
 std::atomic<bool>& stop_flag();

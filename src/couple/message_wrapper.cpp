@@ -37,6 +37,7 @@ struct MessageWrapper::Impl {
     std::optional<Bytes> initial;     // the subscription's own values for steps < 0
     bool producer_initial = false;    // the producer publishes step -1 at start
     bool self = false;                // our own output channel
+    bool events = false;              // event-driven: hold the newest event up to the step
   };
   struct Consumer {
     std::string model;
@@ -44,6 +45,11 @@ struct MessageWrapper::Impl {
     const Subscription* sub;
     int64_t need;  // oldest of our steps it still needs
     bool done = false;
+    // Event-driven output: the consumer waits to know that this step is complete; our
+    // status goes out as soon as we have completed it (the consumer cannot tell a lost
+    // event from a step without one, and the periodic status would make it wait).
+    int64_t awaits = std::numeric_limits<int64_t>::max();
+    bool heard = false;  // it has reported at least once (it runs)
   };
   struct Output {
     const Publication* pub;
@@ -53,6 +59,7 @@ struct MessageWrapper::Impl {
     int64_t last = std::numeric_limits<int64_t>::min();
     Clock::time_point last_republish{};
     int64_t published_before = std::numeric_limits<int64_t>::min();  // resume: steps up to here are out already
+    int64_t events = 0;  // event-driven: events published so far (stamped before n)
   };
 
   const ScenarioConfig& sc;
@@ -71,6 +78,8 @@ struct MessageWrapper::Impl {
   Clock::time_point last_status{};
   std::string self_channel_note;
   TimeManager time;
+  std::pair<std::string, int64_t> reported_wait;  // in our last status
+  bool status_wanted = false;  // a consumer of an event channel waits: tell it our counts
 
   Impl(const ScenarioConfig& s, const std::string& model, Transport& t, std::unique_ptr<ModelFunction> f,
        WrapperOptions o)
@@ -79,7 +88,7 @@ struct MessageWrapper::Impl {
     status.model = cfg.name;
     status.steps = total;
     for (const auto& p : cfg.publish) {
-      Output out{&p, LcmCodec(sc.types, p.type), {}, {}, {}, {}};
+      Output out{&p, LcmCodec(sc.types, p.type), {}, {}, {}, {}, std::numeric_limits<int64_t>::min(), 0};
       for (const auto& m : sc.models) {
         if (m.name == cfg.name) continue;
         for (const auto& sub : m.subscribe)
@@ -101,6 +110,7 @@ struct MessageWrapper::Impl {
           if (p.channel == sub.channel) {
             in.producer_initial = p.initial.has_value();
             in.self = m.name == cfg.name;
+            in.events = p.events;
           }
       inputs.push_back(std::move(in));
     }
@@ -135,6 +145,13 @@ struct MessageWrapper::Impl {
       spdlog::warn("{}: dropped a message on '{}': {}", cfg.name, in.sub->channel, e.what());
       return;
     }
+    if (in.events) {
+      // Every event before the complete step is here already: this is a re-sent copy.
+      if (step < time.events_complete(in.sub->channel)) return;
+      time.on_message(in.sub->channel, step);
+      in.buffer.try_emplace(step, d, d + size);
+      return;
+    }
     time.on_message(in.sub->channel, step);
     if (step < oldest_needed(in, n)) return;  // a late duplicate
     in.buffer.try_emplace(step, d, d + size);
@@ -147,15 +164,33 @@ struct MessageWrapper::Impl {
     } catch (const InputError&) {
       return;
     }
-    time.on_status(s.model, s.step, s.state == ModelState::kDone);
+    time.on_status(s.model, s.step, s.state == ModelState::kDone, s.events);
     for (auto& out : outputs) {
       for (auto& c : out.consumers) {
         if (c.model != s.model) continue;
+        c.heard = true;
         if (s.state == ModelState::kDone) c.done = true;
         for (const auto& [ch, step] : s.needs)
           if (ch == out.pub->channel) c.need = std::max(c.need, step);
-        for (const auto& [ch, step] : s.waiting)
-          if (ch == out.pub->channel && step <= out.last) republish(out, step);
+        for (const auto& [ch, step] : s.waiting) {
+          if (ch != out.pub->channel) continue;
+          if (out.pub->events) {
+            // It cannot tell a lost event from a step without one: re-send what we keep
+            // from that step, and our counts once we are past it.
+                    if (step >= n) {
+              c.awaits = std::min(c.awaits, step);  // answered when we complete it
+            } else if (step >= status.step) {
+              status_wanted = true;  // our last status did not cover it yet
+            } else if (Clock::now() - last_status >= std::chrono::milliseconds(opt.republish_ms)) {
+              // It covered it, a while ago, and the consumer still waits: an event or our
+              // status was lost (a request that crossed our status on the way is ignored).
+              republish(out, step);
+              status_wanted = true;
+            }
+          } else if (step <= out.last) {
+            republish(out, step);
+          }
+        }
       }
     }
   }
@@ -171,7 +206,38 @@ struct MessageWrapper::Impl {
   }
 
   int64_t oldest_needed(const Input& in, int64_t step) const {
+    // Event-driven: the producer need not keep (or re-send) anything before the complete step.
+    if (in.events) return time.events_complete(in.sub->channel);
     return in.sub->expected_step(step) - (in.sub->history - 1);
+  }
+
+  bool is_event_input(const std::string& channel) const {
+    for (const auto& in : inputs)
+      if (in.events && in.sub->channel == channel) return true;
+    return false;
+  }
+
+  // Sample-and-hold: the newest event stamped at or before the step needed, else the
+  // subscription's initial values; only once every event up to that step is known.
+  bool gather_events(std::size_t i, std::pair<std::string, int64_t>* missing) {
+    auto& in = inputs[i];
+    const int64_t want = in.sub->expected_step(n);
+    const int64_t complete = time.events_complete(in.sub->channel);
+    const bool before_events = want < -1 || (want == -1 && !in.producer_initial);  // initial values only
+    if (!before_events && want >= complete) {
+      if (missing) *missing = {in.sub->channel, complete};
+      return false;
+    }
+    auto it = in.buffer.upper_bound(want);
+    if (it != in.buffer.begin()) {
+      args[i].push_back(&std::prev(it)->second);
+    } else if (in.initial) {
+      args[i].push_back(&*in.initial);
+    } else {
+      if (missing) *missing = {in.sub->channel, want};  // validation prevents this
+      return false;
+    }
+    return true;
   }
 
   // Collects the inputs of step n; on a missing one names it.
@@ -179,6 +245,10 @@ struct MessageWrapper::Impl {
     for (std::size_t i = 0; i < inputs.size(); ++i) {
       auto& in = inputs[i];
       args[i].clear();
+      if (in.events) {
+        if (!gather_events(i, missing)) return false;
+        continue;
+      }
       const int64_t newest = in.sub->expected_step(n);
       for (int k = 0; k < in.sub->history; ++k) {
         const int64_t s = newest - k;
@@ -216,7 +286,14 @@ struct MessageWrapper::Impl {
   }
 
   void publish_output(Output& out, int64_t step, Bytes bytes) {
-    if (step > out.published_before) tr.publish(out.pub->channel, bytes.data(), bytes.size());
+    if (out.pub->events) {
+      if (bytes.empty()) return;  // no event at this step
+      ++out.events;
+    }
+    if (step > out.published_before)
+      tr.publish(out.pub->channel, bytes.data(), bytes.size());
+    else
+      tr.publish_within_group(out.pub->channel, bytes.data(), bytes.size());  // its peers re-run too
     out.last = step;
     for (auto& in : inputs)
       if (in.self && in.sub->channel == out.pub->channel) in.buffer.emplace(step, bytes);
@@ -225,6 +302,12 @@ struct MessageWrapper::Impl {
 
   void trim() {
     for (auto& in : inputs) {
+      if (in.events) {
+        // Keep the newest event at or before the step needed next (it is held) and later ones.
+        auto it = in.buffer.upper_bound(in.sub->expected_step(n));
+        if (it != in.buffer.begin()) in.buffer.erase(in.buffer.begin(), std::prev(it));
+        continue;
+      }
       const int64_t keep = oldest_needed(in, n);
       in.buffer.erase(in.buffer.begin(), in.buffer.lower_bound(keep));
     }
@@ -242,9 +325,13 @@ struct MessageWrapper::Impl {
     status.state = state;
     status.waiting.clear();
     if (waiting) status.waiting.push_back(*waiting);
+    reported_wait = waiting ? *waiting : std::pair<std::string, int64_t>{};
     status.needs.clear();
     for (const auto& in : inputs)
       status.needs.emplace_back(in.sub->channel, n >= total ? std::numeric_limits<int64_t>::max() : oldest_needed(in, n));
+    status.events.clear();
+    for (const auto& out : outputs)
+      if (out.pub->events) status.events.emplace_back(out.pub->channel, out.events);
     status.error = error;
     status.granted = time.granted();
     const auto bytes = encode_status(sc.types, status);
@@ -254,8 +341,18 @@ struct MessageWrapper::Impl {
 
   bool consumers_done() const {
     for (const auto& out : outputs)
+      for (const auto& c : out.consumers) {
+        // An event consumer is served only once it knows our last step had no more events.
+        const int64_t last = out.pub->events ? total - 1 : out.last;
+        if (!c.done && c.need <= last) return false;
+      }
+    return true;
+  }
+
+  bool consumers_heard() const {
+    for (const auto& out : outputs)
       for (const auto& c : out.consumers)
-        if (!c.done && c.need <= out.last) return false;
+        if (!c.heard && !c.done) return false;
     return true;
   }
 
@@ -272,7 +369,10 @@ struct MessageWrapper::Impl {
       for (const auto& [step, bytes] : in.buffer) list.push_back({{"step", step}, {"message", json::binary(bytes)}});
       self[in.sub->channel] = std::move(list);
     }
-    const json j = {{"step", n}, {"model", json::binary(fn->save())}, {"self", std::move(self)}};
+    json events = json::object();
+    for (const auto& out : outputs)
+      if (out.pub->events) events[out.pub->channel] = out.events;
+    const json j = {{"step", n}, {"model", json::binary(fn->save())}, {"self", std::move(self)}, {"events", std::move(events)}};
     const auto bytes = json::to_cbor(j);
     tr.publish(checkpoint_channel(cfg.name), bytes.data(), bytes.size());
   }
@@ -301,7 +401,10 @@ struct MessageWrapper::Impl {
       for (const auto& e : j["self"][in.sub->channel]) in.buffer.emplace(e.at("step").get<int64_t>(), e.at("message").get_binary());
     }
     n = step;
-    for (auto& out : outputs) out.last = n - 1;
+    for (auto& out : outputs) {
+      out.last = n - 1;
+      if (out.pub->events) out.events = j.value("events", json::object()).value(out.pub->channel, int64_t{0});
+    }
     spdlog::warn("{}: resumed from its checkpoint at step {}", cfg.name, n);
   }
 
@@ -317,6 +420,7 @@ struct MessageWrapper::Impl {
     Clock::time_point finished{};
     while (!stop_requested()) {
       tr.handle(0);
+      answer_status_request();
       if (n < total) {
         if (gather(&wait) && granted(&wait) && flow_ok(&wait)) {
           compute();
@@ -328,12 +432,19 @@ struct MessageWrapper::Impl {
           send_status(ModelState::kDone, nullptr);
         }
         if (consumers_done()) return;
+        // A consumer that has not started yet (hundreds of processes start slowly) still
+        // needs everything: the linger time counts only once every consumer has reported
+        // (the launcher fails a run whose model never reports).
+        if (!consumers_heard()) finished = Clock::now();
         if (Clock::now() - finished > std::chrono::duration<double>(opt.linger_seconds)) {
           spdlog::warn("{}: finished, but not every consumer confirmed it got the last steps", cfg.name);
           return;
         }
       }
+      // A new wait for an event channel's completeness is reported at once (see Consumer::awaits).
+      if (n < total && wait != reported_wait && is_event_input(wait.first)) send_status(ModelState::kWaiting, &wait);
       tr.handle(20);
+      answer_status_request();
       // Report at most every 20 ms while blocked: consumers learn what to re-send, the
       // launcher what everyone waits for.
       if (Clock::now() - last_status > std::chrono::milliseconds(20)) {
@@ -347,6 +458,15 @@ struct MessageWrapper::Impl {
     send_status(ModelState::kStopped, nullptr);
   }
 
+  // A consumer of an event channel waits for a step it cannot know complete: send our
+  // counts now (at most every republish interval) instead of at the next periodic report.
+  void answer_status_request() {
+    if (!status_wanted) return;
+    status_wanted = false;
+    if (n < total) send_status(ModelState::kRunning, nullptr);
+    else send_status(ModelState::kDone, nullptr);
+  }
+
   void compute() {
     if (n == opt.kill_at) {
       spdlog::warn("{}: --kill: SIGKILL at step {}", cfg.name, n);
@@ -357,6 +477,7 @@ struct MessageWrapper::Impl {
     try {
       fn->step(n, static_cast<double>(n) * cfg.dt, args, results);
       for (std::size_t i = 0; i < outputs.size(); ++i) {
+        if (outputs[i].pub->events && results[i].empty()) continue;  // no event this step
         const int64_t stamped = outputs[i].codec.read_int64(results[i].data(), results[i].size(), kStepField);
         if (stamped != n)
           throw Failure("model '" + cfg.name + "' stamped step " + std::to_string(stamped) + " on channel '" +
@@ -370,6 +491,14 @@ struct MessageWrapper::Impl {
     if (opt.on_step) opt.on_step(n);
     ++n;
     trim();
+    bool awaited = false;
+    for (auto& out : outputs)
+      for (auto& c : out.consumers)
+        if (c.awaits < n) {
+          awaited = true;
+          c.awaits = std::numeric_limits<int64_t>::max();
+        }
+    if (awaited && n % opt.status_every != 0) send_status(ModelState::kRunning, nullptr);
     if (checkpointing() && n % cfg.checkpoint_every == 0 && n < total) save_checkpoint();
     if (n % opt.status_every == 0) send_status(ModelState::kRunning, nullptr);
   }

@@ -216,12 +216,13 @@ ModelConfig load_model_config(const fs::path& file) {
       const YAML::Node p = pubs[i];
       const std::string where = "publish[" + std::to_string(i) + "].";
       if (!p.IsMap()) bad(file, p, "field '" + where.substr(0, where.size() - 1) + "' must be a mapping");
-      check_keys(file, p, {"channel", "type", "initial"}, where);
+      check_keys(file, p, {"channel", "type", "initial", "events"}, where);
       Publication pub;
       pub.line = line_of(p);
       pub.channel = get<std::string>(file, p, "channel", where);
       pub.type = get<std::string>(file, p, "type", where);
       if (p["initial"]) pub.initial = to_json(p["initial"]);
+      pub.events = get_or<bool>(file, p, "events", where, false);
       for (const auto& other : m.publish)
         if (other.channel == pub.channel) bad(file, p, "channel '" + pub.channel + "' published twice");
       m.publish.push_back(pub);
@@ -236,13 +237,14 @@ ModelConfig load_model_config(const fs::path& file) {
 ScenarioConfig load_scenario(const fs::path& file_in) {
   const fs::path file = fs::absolute(file_in).lexically_normal();
   const YAML::Node root = load_yaml(file);
-  check_keys(file, root, {"name", "transport", "timeout", "messages", "models", "local"}, "");
+  check_keys(file, root, {"name", "transport", "timeout", "messages", "models", "local", "models_per_process"}, "");
   ScenarioConfig sc;
   sc.file = file;
   sc.name = get_or<std::string>(file, root, "name", "", file.stem().string());
   sc.transport = get_or<std::string>(file, root, "transport", "", sc.transport);
   sc.timeout_seconds = get_or<double>(file, root, "timeout", "", sc.timeout_seconds);
   if (!(sc.timeout_seconds > 0)) bad(file, root["timeout"], "field 'timeout' must be positive (seconds)");
+  sc.models_per_process = positive(file, root, "models_per_process", "", 1);
   sc.messages = message_files(file, root);
   const YAML::Node models = root["models"];
   if (!models || !models.IsSequence() || models.size() == 0) bad(file, root, "field 'models' must be a non-empty list");
@@ -368,6 +370,17 @@ void validate_scenario(ScenarioConfig& sc) {
         throw_input_error(m.file, s.line, "channel '" + s.channel + "': model '" + m.name + "' expects type '" + s.type +
                                               "' but model '" + prod.model->name + "' publishes '" + prod.pub->type +
                                               "' (" + prod.model->file.string() + ":" + std::to_string(prod.pub->line) + ")");
+      if (prod.pub->events) {
+        if (prod.model == &m)
+          throw_input_error(m.file, s.line, "channel '" + s.channel + "': a model cannot read its own event-driven channel");
+        if (s.history != 1)
+          throw_input_error(m.file, s.line, "field '" + f + ".history': channel '" + s.channel +
+                                                "' is event-driven (held until the next event): history must be 1");
+        if (!s.initial && !prod.pub->initial)
+          throw_input_error(m.file, s.line, "channel '" + s.channel + "' is event-driven: give 'initial' values for subscription '" +
+                                                s.channel + "' (held until the first event) or an 'initial' publish in " +
+                                                prod.model->file.string());
+      }
       const double want = s.substeps > 1 ? m.dt / s.substeps : m.dt * s.every;
       if (std::abs(prod.model->dt - want) > 1e-9 * std::max(want, prod.model->dt))
         throw_input_error(m.file, s.line, "channel '" + s.channel + "': producer '" + prod.model->name + "' has dt " +

@@ -38,6 +38,10 @@ struct Publication {
   std::string channel;
   std::string type;
   std::optional<nlohmann::json> initial;  // published once, stamped step -1, before step 0
+  // Event-driven: a step may publish nothing on this channel (the model leaves the output
+  // empty). Consumers hold the newest event up to the step they need (sample-and-hold) and
+  // learn from the producer's status that they have every event up to a step.
+  bool events = false;
   std::size_t line = 0;
 };
 
@@ -70,6 +74,9 @@ struct ScenarioConfig {
   std::string name;
   std::string transport = "udpm://239.255.76.67:7667?ttl=0";
   double timeout_seconds = 10;  // no model advancing for this long fails the run
+  // `couple launch` over processes: consecutive models hosted per process (one wrapper
+  // thread each), so a scenario of hundreds of models runs on a small machine.
+  int models_per_process = 1;
   std::vector<std::filesystem::path> messages;
   std::vector<ModelConfig> models;
   TypeRegistry types;  // every .lcm file of the scenario and its models

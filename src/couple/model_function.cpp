@@ -27,6 +27,7 @@ using nlohmann::json;
 class PluginModel final : public ModelFunction {
  public:
   PluginModel(const ModelConfig& cfg, const fs::path& lib) : name_(cfg.name) {
+    for (const auto& p : cfg.publish) events_.push_back(p.events);  // may stay empty: no event
     handle_ = dlopen(lib.c_str(), RTLD_NOW | RTLD_LOCAL);
     if (!handle_) throw InputError(located(cfg.file, 0, std::string("cannot load plugin: ") + dlerror()));
     auto sym = [&](const char* s) {
@@ -92,12 +93,13 @@ class PluginModel final : public ModelFunction {
     if (rc != 0) throw Failure("model '" + name_ + "' failed at step " + std::to_string(n) + ": " + err);
     if (ctx.bad_index) throw Failure("model '" + name_ + "' emitted an output index beyond its publish list");
     for (std::size_t i = 0; i < outputs.size(); ++i)
-      if (outputs[i].empty())
+      if (outputs[i].empty() && !events_[i])
         throw Failure("model '" + name_ + "' produced no output " + std::to_string(i) + " at step " + std::to_string(n));
   }
 
  private:
   std::string name_;
+  std::vector<bool> events_;
   void* handle_ = nullptr;
   void* (*create_)(const char*, char*, size_t) = nullptr;
   int (*step_)(void*, int64_t, double, const bs_buffer*, size_t, bs_emit_fn, void*, char*, size_t) = nullptr;
@@ -110,9 +112,12 @@ class PluginModel final : public ModelFunction {
 };
 
 // JSON lines over the child's stdin/stdout:
-//   -> {"init": PARAMETERS}                       <- {"ok": true}
+//   -> {"init": PARAMETERS}                       <- {"ok": true[, "checkpoint": true]}
 //   -> {"step": N, "t": T, "inputs": {CHANNEL: [newest, ...]}}
 //   <- {"outputs": {CHANNEL: {member: value, ...}}}   or {"error": "message"}
+// and, for a program that said "checkpoint": true, the checkpoint hooks:
+//   -> {"save": true}                             <- {"state": ANY JSON VALUE}
+//   -> {"load": THAT VALUE}                       <- {"ok": true}
 class ExternalModel final : public ModelFunction {
  public:
   ExternalModel(const ModelConfig& cfg, const TypeRegistry& types) : cfg_(cfg) {
@@ -140,6 +145,27 @@ class ExternalModel final : public ModelFunction {
     from_ = fdopen(from_child[0], "r");
     const json reply = call({{"init", cfg.parameters}}, -1);
     if (!reply.value("ok", false)) throw Failure("model '" + cfg.name + "' did not start: " + reply.dump());
+    checkpoints_ = reply.value("checkpoint", false);
+  }
+  bool can_checkpoint() const override { return checkpoints_; }
+  Bytes save() override {
+    const json reply = call({{"save", true}}, -2);
+    if (!reply.contains("state"))
+      throw Failure("model '" + cfg_.name + "' could not save its checkpoint: " +
+                    (reply.contains("error") ? reply["error"].dump() : "no 'state' in its reply " + reply.dump().substr(0, 200)));
+    const std::string text = reply["state"].dump();
+    return Bytes(text.begin(), text.end());
+  }
+  void load(const Bytes& state) override {
+    json value;
+    try {
+      value = json::parse(state.begin(), state.end());
+    } catch (const json::exception& e) {
+      throw Failure("model '" + cfg_.name + "': its checkpoint is not JSON: " + e.what());
+    }
+    const json reply = call({{"load", std::move(value)}}, -2);
+    if (!reply.value("ok", false))
+      throw Failure("model '" + cfg_.name + "' could not load its checkpoint: " + reply.dump().substr(0, 200));
   }
   ~ExternalModel() override {
     if (to_) std::fclose(to_);
@@ -166,6 +192,10 @@ class ExternalModel final : public ModelFunction {
       throw Failure("model '" + cfg_.name + "' failed at step " + std::to_string(n) + ": " + reply["error"].dump());
     for (std::size_t i = 0; i < outputs.size(); ++i) {
       const auto& ch = cfg_.publish[i].channel;
+      outputs[i].clear();
+      // An event-driven channel without an entry (or null) has no event at this step.
+      if (cfg_.publish[i].events && (!reply.contains("outputs") || !reply["outputs"].contains(ch) || reply["outputs"][ch].is_null()))
+        continue;
       if (!reply.contains("outputs") || !reply["outputs"].contains(ch))
         throw Failure("model '" + cfg_.name + "' returned no output for channel '" + ch + "' at step " + std::to_string(n));
       json v = reply["outputs"][ch];
@@ -192,7 +222,9 @@ class ExternalModel final : public ModelFunction {
       usleep(5000);
     }
     throw Failure("model '" + cfg_.name + "' (external program " + cfg_.command[0] + ") " + how +
-                  (n < 0 ? std::string(" while starting") : " at step " + std::to_string(n)));
+                  (n == -1   ? std::string(" while starting")
+                   : n == -2 ? std::string(" while saving or loading its checkpoint")
+                             : " at step " + std::to_string(n)));
   }
   json call(const json& req, int64_t n) {
     const std::string line = req.dump() + "\n";
@@ -208,6 +240,7 @@ class ExternalModel final : public ModelFunction {
     }
   }
   ModelConfig cfg_;
+  bool checkpoints_ = false;
   std::vector<LcmCodec> in_codecs_, out_codecs_;
   pid_t pid_ = -1;
   FILE* to_ = nullptr;

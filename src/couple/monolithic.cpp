@@ -1,5 +1,7 @@
 #include "couple/monolithic.hpp"
 
+#include <set>
+
 #include "core/errors.hpp"
 #include "couple/lcm_codec.hpp"
 #include "couple/model_function.hpp"
@@ -25,7 +27,14 @@ ChannelRecords run_monolithic(const ScenarioConfig& sc) {
       }
     }
   }
+  std::set<std::string> event_channels;
+  for (const auto& m : sc.models)
+    for (const auto& p : m.publish)
+      if (p.events) event_channels.insert(p.channel);
   std::vector<int64_t> next(sc.models.size(), 0);
+  std::map<std::string, std::size_t> producer;
+  for (std::size_t i = 0; i < sc.models.size(); ++i)
+    for (const auto& p : sc.models[i].publish) producer[p.channel] = i;
   std::vector<std::vector<Bytes>> sub_initial(sc.models.size());
   for (std::size_t i = 0; i < sc.models.size(); ++i)
     for (const auto& s : sc.models[i].subscribe) {
@@ -50,6 +59,17 @@ ChannelRecords run_monolithic(const ScenarioConfig& sc) {
         for (std::size_t k = 0; k < m.subscribe.size() && ready; ++k) {
           const auto& s = m.subscribe[k];
           const auto& ch = data[s.channel];
+          if (event_channels.count(s.channel)) {
+            // Sample-and-hold once the producer is past the step: the newest event up to it.
+            const int64_t want = s.expected_step(n);
+            if (want >= 0 && next[producer.at(s.channel)] <= want) {
+              ready = false;
+              break;
+            }
+            auto it = ch.upper_bound(want);
+            args[k].push_back(it != ch.begin() ? &std::prev(it)->second : &sub_initial[i][k]);
+            continue;
+          }
           for (int h = 0; h < s.history; ++h) {
             const int64_t step = s.expected_step(n) - h;
             auto it = ch.find(step);
@@ -66,7 +86,8 @@ ChannelRecords run_monolithic(const ScenarioConfig& sc) {
         if (!ready) break;
         outs.assign(m.publish.size(), {});
         fns[i]->step(n, static_cast<double>(n) * m.dt, args, outs);
-        for (std::size_t k = 0; k < m.publish.size(); ++k) data[m.publish[k].channel][n] = std::move(outs[k]);
+        for (std::size_t k = 0; k < m.publish.size(); ++k)
+          if (!(m.publish[k].events && outs[k].empty())) data[m.publish[k].channel][n] = std::move(outs[k]);
         ++next[i];
         progressed = true;
       }

@@ -47,6 +47,10 @@ class NatsTransport final : public Transport {
     if (s == NATS_OK) s = natsOptions_SetTimeout(opts, 5000);
     if (s == NATS_OK) s = natsOptions_SetMaxReconnect(opts, 20);
     if (s == NATS_OK) s = natsOptions_SetReconnectWait(opts, 250);
+    // The library's shared delivery thread instead of one thread per subscription: a
+    // wrapper subscribes to a few channels and statuses, a district aggregator to hundreds,
+    // and a process may host many wrappers; the callback only queues for handle().
+    if (s == NATS_OK) s = natsOptions_UseGlobalMessageDelivery(opts, true);
     if (s == NATS_OK) s = natsConnection_Connect(&conn_, opts);
     natsOptions_Destroy(opts);
     if (s != NATS_OK) close(wake_);

@@ -287,7 +287,13 @@ GeneratedStub generate_model_stub(const ModelConfig& cfg, std::vector<fs::path> 
     py << "#!/usr/bin/env python3\n"
        << "\"\"\"The model function of '" << N << "' as an external program (JSON lines on stdin/stdout).\n"
        << "Use it with `command: [python3, " << N << ".py]` instead of `plugin:` in the model config.\"\"\"\n"
-       << "import json\nimport sys\n\n\n"
+       << "import json\nimport sys\n\n"
+       << "# Checkpoints (optional): set True once save() and load() keep everything your model\n"
+       << "# keeps between steps; with `checkpoint_every: N` in the config a restarted model\n"
+       << "# then resumes from its last checkpoint instead of replaying from step 0.\n"
+       << "CHECKPOINTS = False\n\n\n"
+       << "def save():\n    return None  # any JSON value\n\n\n"
+       << "def load(state):\n    pass\n\n\n"
        << "def " << N << "(parameters, step, t";
     for (const auto& a : ins) py << ", " << a.name;
     py << "):\n    # TODO: compute the outputs from the inputs.\n";
@@ -295,7 +301,10 @@ GeneratedStub generate_model_stub(const ModelConfig& cfg, std::vector<fs::path> 
     py << "    return {\n" << py_out.str() << "    }\n\n\n"
        << "def main():\n    parameters = {}\n    for line in sys.stdin:\n        request = json.loads(line)\n"
        << "        if \"init\" in request:\n            parameters = request[\"init\"]\n"
-       << "            reply = {\"ok\": True}\n        else:\n            inputs = request[\"inputs\"]\n"
+       << "            reply = {\"ok\": True, \"checkpoint\": CHECKPOINTS}\n"
+       << "        elif \"save\" in request:\n            reply = {\"state\": save()}\n"
+       << "        elif \"load\" in request:\n            load(request[\"load\"])\n            reply = {\"ok\": True}\n"
+       << "        else:\n            inputs = request[\"inputs\"]\n"
        << "            try:\n                reply = {\"outputs\": " << N << "(parameters, request[\"step\"], request[\"t\"]";
     for (const auto& a : ins) py << ", " << a.py;
     py << ")}\n            except Exception as e:  # reported by the launcher, which stops the run\n"

@@ -23,6 +23,9 @@ struct status_t {
   int64_t need_step[nneed];
   string error;
   double granted;
+  int32_t nevent;
+  string event_channel[nevent];
+  int64_t event_count[nevent];
 }
 )";
 }
@@ -66,6 +69,12 @@ std::vector<uint8_t> encode_status(const TypeRegistry& types, const ModelStatus&
     v["wait_channel"].push_back(c);
     v["wait_step"].push_back(n);
   }
+  v["event_channel"] = nlohmann::json::array();
+  v["event_count"] = nlohmann::json::array();
+  for (const auto& [c, n] : s.events) {
+    v["event_channel"].push_back(c);
+    v["event_count"].push_back(n);
+  }
   v["need_channel"] = nlohmann::json::array();
   v["need_step"] = nlohmann::json::array();
   for (const auto& [c, n] : s.needs) {
@@ -86,6 +95,7 @@ ModelStatus decode_status(const TypeRegistry& types, const uint8_t* data, std::s
   s.error = v["error"];
   s.granted = v["granted"].is_number() ? v["granted"].get<double>() : std::numeric_limits<double>::infinity();
   for (std::size_t i = 0; i < v["wait_channel"].size(); ++i) s.waiting.emplace_back(v["wait_channel"][i], v["wait_step"][i]);
+  for (std::size_t i = 0; i < v["event_channel"].size(); ++i) s.events.emplace_back(v["event_channel"][i], v["event_count"][i]);
   for (std::size_t i = 0; i < v["need_channel"].size(); ++i) s.needs.emplace_back(v["need_channel"][i], v["need_step"][i]);
   return s;
 }

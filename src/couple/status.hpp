@@ -40,6 +40,9 @@ struct ModelStatus {
   // The time manager's grant: no message stamped earlier can still reach the model
   // (seconds; +inf for a model without inputs).
   double granted = 0;
+  // Per event-driven output channel: events published stamped before `step` (the initial
+  // publication at step -1 included), so a consumer knows when it has all of them.
+  std::vector<std::pair<std::string, int64_t>> events;
 };
 
 // Adds builtscene.status_t to a registry.

@@ -34,6 +34,9 @@ class Transport {
   virtual void subscribe_from_start(const std::string& channel, Handler handler) { subscribe(channel, std::move(handler)); }
   // The newest stored message of a channel; empty when none is stored.
   virtual std::vector<uint8_t> last_stored(const std::string& /*channel*/) { return {}; }
+  // A restarted group of sub-models re-runs together: a step already on the mediator goes
+  // again to the group's peers only (the hybrid transport's LCM); elsewhere nothing.
+  virtual void publish_within_group(const std::string& /*channel*/, const uint8_t* /*data*/, std::size_t /*size*/) {}
 };
 
 // Throws InputError for an unknown scheme, Failure when the transport cannot start

@@ -127,3 +127,73 @@ TEST(Checkpoint, AKilledModelResumesFromItsCheckpointAndTheResultsAreIdentical) 
   EXPECT_EQ(exact, 2000u);
   EXPECT_EQ(couple_test::left_over(d), "");
 }
+
+TEST(Checkpoint, AKilledExternalJsonLinesModelResumesFromItsCheckpoint) {
+  // The same running sum as an external python3 program with the protocol's save/load
+  // requests: its state (the sum) travels as JSON through the mediator.
+  const auto d = couple_test::temp_dir("checkpoint_ext");
+  couple_test::write(d / "types.lcm", "package cp;\nstruct x_t { int64_t step; double x; }\nstruct y_t { int64_t step; double y; }\n");
+  couple_test::write(d / "src.py",
+                     "import json,sys\nfor line in sys.stdin:\n    r=json.loads(line)\n"
+                     "    print(json.dumps({'ok':True} if 'init' in r else {'outputs':{'X':{'x':0.5*r['step']+1}}}), flush=True)\n");
+  couple_test::write(d / "acc.py",
+                     "import json,sys\ntotal = 0.0\ntrace = None\nfor line in sys.stdin:\n    r = json.loads(line)\n"
+                     "    if 'init' in r:\n        trace = r['init']['trace']\n        reply = {'ok': True, 'checkpoint': True}\n"
+                     "    elif 'save' in r:\n        reply = {'state': {'sum': total}}\n"
+                     "    elif 'load' in r:\n        total = r['load']['sum']\n        reply = {'ok': True}\n"
+                     "    else:\n        total += r['inputs']['X'][0]['x']\n"
+                     "        open(trace, 'a').write('%d\\n' % r['step'])\n"
+                     "        reply = {'outputs': {'Y': {'y': total}}}\n"
+                     "    print(json.dumps(reply), flush=True)\n");
+  const std::string head = "dt: 0.01\nend_time: 20\nmessages: types.lcm\n";
+  couple_test::write(d / "src.yaml", "name: src\n" + head + "command: [python3, src.py]\npublish:\n  - {channel: X, type: cp.x_t}\n");
+  auto run = [&](const std::string& tag, const std::string& extra) {
+    couple_test::write(d / ("acc-" + tag + ".yaml"),
+                       "name: acc\n" + head + "command: [python3, acc.py]\ncheckpoint_every: 500\nparameters: {trace: " +
+                           (d / (tag + ".trace")).string() +
+                           "}\nsubscribe:\n  - {channel: X, type: cp.x_t}\npublish:\n  - {channel: Y, type: cp.y_t}\n");
+    couple_test::write(d / ("scenario-" + tag + ".yaml"),
+                       "name: cp\ntransport: mediator\ntimeout: 10\nmodels: [src.yaml, acc-" + tag + ".yaml]\n");
+    return couple_test::run("{ TMPDIR=" + d.string() + " " + kBin + " couple launch " +
+                            (d / ("scenario-" + tag + ".yaml")).string() + " --record " +
+                            (d / (tag + ".lcmlog")).string() + " --json " + extra + " > " +
+                            (d / (tag + ".json")).string() + "; }");
+  };
+  const auto a = run("a", "");
+  ASSERT_EQ(a.code, 0) << a.out;
+  const auto b = run("b", "--kill acc@1234");
+  ASSERT_EQ(b.code, 0) << b.out;
+  EXPECT_EQ(json::parse(std::ifstream(d / "b.json"))["restarts"]["acc"], 1);
+  EXPECT_NE(b.out.find("acc: resumed from its checkpoint at step 1000"), std::string::npos) << b.out;
+  std::vector<int64_t> want;
+  for (int64_t s = 0; s < 1234; ++s) want.push_back(s);
+  for (int64_t s = 1000; s < 2000; ++s) want.push_back(s);
+  EXPECT_EQ(read_trace(d / "b.trace"), want);
+  const ScenarioConfig sc = load_scenario(d / "scenario-a.yaml");
+  auto ya = couple_test::read_log(d / "a.lcmlog", sc)["Y"], yb = couple_test::read_log(d / "b.lcmlog", sc)["Y"];
+  ASSERT_EQ(ya.size(), 2000u);
+  ASSERT_EQ(yb.size(), 2000u);
+  std::size_t exact = 0;
+  for (int64_t n = 0; n < 2000; ++n)
+    exact += ya[n]["y"].get<double>() == closed_form(n) && yb[n]["y"].get<double>() == closed_form(n);
+  EXPECT_EQ(exact, 2000u);
+  EXPECT_EQ(couple_test::left_over(d), "");
+}
+
+TEST(Checkpoint, AnExternalModelThatCannotSaveStopsTheRunWithItsName) {
+  const auto d = couple_test::temp_dir("checkpoint_ext_bad");
+  couple_test::write(d / "types.lcm", "package cp;\nstruct y_t { int64_t step; double y; }\n");
+  // Says it checkpoints but answers a save request without a state.
+  couple_test::write(d / "bad.py",
+                     "import json,sys\nfor line in sys.stdin:\n    r = json.loads(line)\n"
+                     "    reply = {'ok': True, 'checkpoint': True} if 'init' in r else {'nope': 1} if 'save' in r "
+                     "else {'outputs': {'Y': {'y': 1.0}}}\n    print(json.dumps(reply), flush=True)\n");
+  couple_test::write(d / "bad.yaml", "name: bad\ndt: 0.1\nend_time: 10\nmessages: types.lcm\ncommand: [python3, bad.py]\n"
+                                     "checkpoint_every: 10\npublish:\n  - {channel: Y, type: cp.y_t}\n");
+  couple_test::write(d / "scenario.yaml", "name: cp\ntransport: mediator\ntimeout: 10\nmodels: [bad.yaml]\n");
+  const auto r = couple_test::run("{ TMPDIR=" + d.string() + " " + kBin + " couple launch " + (d / "scenario.yaml").string() + "; }");
+  EXPECT_EQ(r.code, 1) << r.out;
+  EXPECT_NE(r.out.find("model 'bad' could not save its checkpoint: no 'state' in its reply {\"nope\":1}"), std::string::npos)
+      << r.out;
+  EXPECT_EQ(couple_test::left_over(d), "");
+}

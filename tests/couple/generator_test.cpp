@@ -120,13 +120,20 @@ TEST(PrototypeGenerator, PythonStubSpeaksJsonLines) {
   const auto r = couple_test::run(
       "printf '%s\\n' '{\"init\": {\"offset\": 1}}' "
       "'{\"step\": 0, \"t\": 0, \"inputs\": {\"IN\": [{\"x\": 1, \"n\": 0, \"v\": [], \"label\": \"a\"}], "
-      "\"HIST\": [{\"h\": 0}, {\"h\": 0}, {\"h\": 0}]}}' | python3 " + (d / "stub" / "scaler.py").string());
+      "\"HIST\": [{\"h\": 0}, {\"h\": 0}, {\"h\": 0}]}}' '{\"save\": true}' '{\"load\": null}' | python3 " +
+      (d / "stub" / "scaler.py").string());
   ASSERT_EQ(r.code, 0) << r.out;
   std::istringstream lines(r.out);
-  std::string l1, l2;
+  std::string l1, l2, l3, l4;
   std::getline(lines, l1);
   std::getline(lines, l2);
-  EXPECT_EQ(json::parse(l1), json({{"ok", true}}));
+  std::getline(lines, l3);
+  std::getline(lines, l4);
+  // The stub answers the checkpoint requests but says it keeps no checkpoints until the
+  // user fills in save()/load() and sets CHECKPOINTS.
+  EXPECT_EQ(json::parse(l1), json({{"ok", true}, {"checkpoint", false}}));
+  EXPECT_EQ(json::parse(l3), json({{"state", nullptr}}));
+  EXPECT_EQ(json::parse(l4), json({{"ok", true}}));
   const json reply = json::parse(l2);
   ASSERT_TRUE(reply.contains("outputs")) << l2;
   for (const char* k : {"y", "v_sum", "x", "label", "history_sum"}) EXPECT_TRUE(reply["outputs"]["OUT"].contains(k)) << k;

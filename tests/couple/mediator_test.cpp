@@ -306,3 +306,29 @@ TEST(Mediator, BadKillOptionsAreClearErrors) {
   EXPECT_EQ(r.code, 2) << r.out;
   EXPECT_NE(r.out.find("--kill needs the mediator"), std::string::npos) << r.out;
 }
+
+TEST(Mediator, SeveralModelsPerProcessEqualTheMonolithicReferenceAndRestartTogether) {
+  // Two processes: wind + structure (threads of one), controller. The structure's kill at
+  // step 3000 takes the wind with it (one process); both restart and resume.
+  const auto dir = couple_test::temp_dir("mediator_per_process");
+  const std::string scenario = couple_test::kExample + "/scenario-mediator.yaml";
+  const auto r = couple_test::run(in_tmp(dir, kBin + " couple launch " + scenario +
+                                                  " --models-per-process 2 --kill structure@3000 --record " +
+                                                  (dir / "run.lcmlog").string() + " --json > " +
+                                                  (dir / "out.json").string()));
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("model 'wind' (its process also hosts 'structure') was killed by signal Killed"), std::string::npos)
+      << r.out;
+  const json summary = json::parse(std::ifstream(dir / "out.json"));
+  EXPECT_EQ(summary["restarts"]["structure"], 1) << summary.dump();
+  EXPECT_EQ(summary["restarts"]["wind"], 1) << summary.dump();
+  EXPECT_FALSE(summary["restarts"].contains("controller")) << summary.dump();
+  std::size_t compared = 0;
+  EXPECT_LE(worst_difference(dir / "run.lcmlog", scenario, &compared), 1e-12);
+  EXPECT_EQ(compared, 6000u * 6);
+  EXPECT_EQ(couple_test::left_over(dir), "");
+  // A bad value is a clear error naming the option.
+  const auto bad = couple_test::run(kBin + " couple launch " + scenario + " --models-per-process 0");
+  EXPECT_EQ(bad.code, 2) << bad.out;
+  EXPECT_NE(bad.out.find("--models-per-process"), std::string::npos) << bad.out;
+}

@@ -215,3 +215,10 @@ TEST(ModelConfig, CheckpointEveryMustBeAWholeNonNegativeNumberOfSteps) {
   EXPECT_TRUE(has(e, "p.yaml:") && has(e, "field 'checkpoint_every' has a bad value")) << e;
   EXPECT_EQ(load("ckpt_ok", {{"p.yaml", model("p", kPubA + "checkpoint_every: 3\n")}}), "");
 }
+
+TEST(ModelConfig, ModelsPerProcessMustBeAPositiveCount) {
+  const auto p = model("p", "publish:\n  - {channel: A, type: t.a_t}\n");
+  EXPECT_EQ(load("mpp_ok", {{"p.yaml", p}}, "models_per_process: 4\n"), "");
+  const std::string e = load("mpp_bad", {{"p.yaml", p}}, "models_per_process: 0\n");
+  EXPECT_NE(e.find("scenario.yaml:3: field 'models_per_process' must be at least 1"), std::string::npos) << e;
+}
