@@ -201,12 +201,47 @@ LaunchResult finish(const ScenarioConfig& sc, Monitor& mon, Clock::time_point st
   return r;
 }
 
+// Runs each wrapper on its own thread; the first model that throws raises `stop` for the
+// others and its message is kept (the launcher's thread mode and a process hosting several
+// models both run wrappers this way).
+class WrapperThreads {
+ public:
+  WrapperThreads(const std::vector<std::unique_ptr<MessageWrapper>>& wrappers, std::atomic<bool>& stop)
+      : running_(static_cast<int>(wrappers.size())) {
+    for (const auto& w : wrappers)
+      threads_.emplace_back([this, &stop, wp = w.get()] {
+        try {
+          wp->run();
+        } catch (const std::exception& e) {
+          std::lock_guard lock(m_);
+          if (first_error_.empty()) first_error_ = e.what();
+          stop = true;
+        }
+        --running_;
+      });
+  }
+  ~WrapperThreads() { join(); }
+  int running() const { return running_; }
+  void join() {
+    for (auto& t : threads_)
+      if (t.joinable()) t.join();
+  }
+  std::string first_error() {
+    std::lock_guard lock(m_);
+    return first_error_;
+  }
+
+ private:
+  std::mutex m_;
+  std::string first_error_;
+  std::atomic<int> running_;
+  std::vector<std::thread> threads_;
+};
+
 LaunchResult launch_threads(const ScenarioConfig& sc, const LaunchOptions& opt) {
   auto tr = make_transport(sc.transport);
   Monitor mon(sc, *tr, opt.record);
   std::atomic<bool> stop{false};
-  std::mutex m;
-  std::string first_error;
   std::vector<std::unique_ptr<Transport>> transports;
   std::vector<std::unique_ptr<MessageWrapper>> wrappers;
   // Load every model before any starts, so a bad plugin fails before traffic.
@@ -220,22 +255,9 @@ LaunchResult launch_threads(const ScenarioConfig& sc, const LaunchOptions& opt) 
                                                         load_model_function(cfg, sc.types), wo));
   }
   const auto start = Clock::now();
-  std::vector<std::thread> threads;
-  std::atomic<int> running{static_cast<int>(wrappers.size())};
-  for (auto& w : wrappers) {
-    threads.emplace_back([&, wp = w.get()] {
-      try {
-        wp->run();
-      } catch (const std::exception& e) {
-        std::lock_guard lock(m);
-        if (first_error.empty()) first_error = e.what();
-        stop = true;
-      }
-      --running;
-    });
-  }
+  WrapperThreads threads(wrappers, stop);
   std::string failure;
-  while (running > 0) {
+  while (threads.running() > 0) {
     tr->handle(20);
     mon.report_recorder(*tr);
     mon.show(false);
@@ -247,14 +269,11 @@ LaunchResult launch_threads(const ScenarioConfig& sc, const LaunchOptions& opt) 
       break;
     }
   }
-  for (auto& t : threads) t.join();
+  threads.join();
   while (tr->handle(0) > 0) {
   }
   mon.show(true);
-  {
-    std::lock_guard lock(m);
-    if (failure.empty() && !first_error.empty()) failure = first_error;
-  }
+  if (failure.empty()) failure = threads.first_error();
   LaunchResult r = finish(sc, mon, start);
   if (!failure.empty())
     throw Failure(failure + (opt.record.empty() ? "" : " (log kept: " + opt.record.string() + ")"));
@@ -558,27 +577,13 @@ int run_model_process(const std::filesystem::path& scenario_file, const std::vec
     wrappers[0]->run();
     return wrappers[0]->stopped() ? 130 : 0;
   }
-  std::mutex m;
-  std::string first_error;
-  std::atomic<int> running{static_cast<int>(wrappers.size())};
-  std::vector<std::thread> threads;
-  for (auto& w : wrappers)
-    threads.emplace_back([&, wp = w.get()] {
-      try {
-        wp->run();
-      } catch (const std::exception& e) {
-        std::lock_guard lock(m);
-        if (first_error.empty()) first_error = e.what();
-        stop = true;  // one failed model stops the process's others (the launcher stops the run)
-      }
-      --running;
-    });
-  while (running > 0) {
+  WrapperThreads threads(wrappers, stop);
+  while (threads.running() > 0) {
     if (stop_flag()) stop = true;
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
-  for (auto& t : threads) t.join();
-  if (!first_error.empty()) throw Failure(first_error);
+  threads.join();
+  if (const std::string e = threads.first_error(); !e.empty()) throw Failure(e);
   for (const auto& w : wrappers)
     if (w->stopped()) return 130;
   return 0;
