@@ -12,6 +12,7 @@
 #include <optional>
 
 #include "command_registry.hpp"
+#include "descriptor_options.hpp"
 #include "core/errors.hpp"
 #include "core/logging.hpp"
 #include "core/progress.hpp"
@@ -30,6 +31,7 @@ struct LocalizeOptions {
   std::filesystem::path dataset, camera, map, trajectory, vocabulary;
   long max_frames = 0;
   LocalizeOutputOptions outputs;
+  DescriptorOptions features;
 };
 
 nlohmann::json run_localize(const LocalizeOptions& opt) {
@@ -38,6 +40,8 @@ nlohmann::json run_localize(const LocalizeOptions& opt) {
   slam::SystemOptions so;
   so.orb = OrbExtractorOptions::from_settings(SettingsFile::load(camera_file));
   so.vocabulary = opt.vocabulary;
+  opt.features.apply(so);
+  opt.features.check_outputs();
   if (!opt.trajectory.empty()) {
     std::ofstream probe(opt.trajectory, std::ios::app);
     if (!probe) throw InputError(located(opt.trajectory, 0, "cannot write output file"));
@@ -57,6 +61,7 @@ nlohmann::json run_localize(const LocalizeOptions& opt) {
   const std::size_t n = opt.max_frames > 0 ? std::min<std::size_t>(data.size(), static_cast<std::size_t>(opt.max_frames))
                                            : data.size();
   long tracked = 0, lost = 0;
+  TrackingDiagnostics diagnostics;
   RgbdFrameReader frames(data, n);
   Progress progress("localize", n);
   const auto start = std::chrono::steady_clock::now();
@@ -65,6 +70,7 @@ nlohmann::json run_localize(const LocalizeOptions& opt) {
     const std::size_t i = f->index;
     const auto out = system.track_rgbd(f->rgb, f->depth, f->timestamp);
     const bool ok = out.state == slam::TrackingState::kOk;
+    diagnostics.add(static_cast<long>(i), f->timestamp, out, system.saft_learning() ? system.saft_learning()->stats().weight_updates : 0);
     if (ok) ++tracked;
     else ++lost;
     if (!observers.empty()) {
@@ -79,6 +85,7 @@ nlohmann::json run_localize(const LocalizeOptions& opt) {
   const Trajectory traj = system.trajectory();
   if (!opt.trajectory.empty()) write_tum_trajectory(opt.trajectory, traj);
   const long processed = frames.delivered();
+  diagnostics.write_csv(opt.features.inliers_out);
   nlohmann::json switches = nlohmann::json::array();
   for (const auto& sw : system.mode_switches())
     switches.push_back({{"frame", sw.frame}, {"from", slam::to_string(sw.from)}, {"to", slam::to_string(sw.to)},
@@ -101,6 +108,7 @@ nlohmann::json run_localize(const LocalizeOptions& opt) {
       {"stage_ms", system.timer().summary()},
       {"trajectory", opt.trajectory.string()},
       {"trajectory_poses", traj.size()},
+      {"features", diagnostics.summary(system, opt.features)},
   };
   // The outputs' summaries (ogm, poi_events, markers) join the run's.
   const auto output_summary = outputs.finish();
@@ -123,6 +131,7 @@ const bool registered_localize = register_command({
       cmd.add_option("--vocabulary", opt->vocabulary,
                      "Bag-of-words vocabulary (default: the shipped one; must be the map's)");
       opt->outputs.add_to(cmd);
+      opt->features.add_to(cmd);
       return [opt] { return run_localize(*opt); };
     },
     .order = 41});

@@ -8,6 +8,7 @@
 #include <memory>
 
 #include "command_registry.hpp"
+#include "descriptor_options.hpp"
 #include "rgbd_frame_reader.hpp"
 #include "core/errors.hpp"
 #include "core/logging.hpp"
@@ -37,6 +38,7 @@ struct SlamOptions {
   bool no_relocalization = false;
   bool no_loop_closing = false;
   SlamOgmOptions ogm;
+  DescriptorOptions features;
 };
 
 // The mode plan from the command line; the region is on the ground plane of the map's world.
@@ -65,6 +67,8 @@ nlohmann::json run_slam(const SlamOptions& opt) {
   so.vocabulary = opt.vocabulary;
   so.relocalization = !opt.no_relocalization;
   so.loop_closing = !opt.no_loop_closing;
+  opt.features.apply(so);
+  opt.features.check_outputs();
   // Fail on an unwritable output before spending minutes on the sequence.
   const auto start_mode = slam::parse_mode(opt.mode);
   if (!start_mode) throw InputError("--mode: '" + opt.mode + "' must be slam or localize");
@@ -96,6 +100,7 @@ nlohmann::json run_slam(const SlamOptions& opt) {
                                            : data.size();
   long tracked = 0, lost = 0, lost_events = 0, not_initialized = 0, no_features = 0;
   bool was_ok = false;
+  TrackingDiagnostics diagnostics;
   RgbdFrameReader frames(data, n);
   Progress progress("slam", n);
   const auto start = std::chrono::steady_clock::now();
@@ -105,6 +110,7 @@ nlohmann::json run_slam(const SlamOptions& opt) {
     if (const auto d = plan.decide(static_cast<long>(i), system.last_pose())) system.set_mode(d->mode, d->reason);
     const auto out = system.track_rgbd(f->rgb, f->depth, f->timestamp);
     if (ogm) ogm->after_frame(system, out, f->timestamp, f->depth);
+    diagnostics.add(static_cast<long>(i), f->timestamp, out, system.saft_learning() ? system.saft_learning()->stats().weight_updates : 0);
     if (out.keypoints < 20) ++no_features;
     if (out.state == slam::TrackingState::kOk) {
       ++tracked;
@@ -143,6 +149,8 @@ nlohmann::json run_slam(const SlamOptions& opt) {
                         {"to", slam::to_string(sw.to)}, {"reason", sw.reason}});
 
   const nlohmann::json ogm_summary = ogm ? ogm->finish(system) : nlohmann::json();
+  diagnostics.write_csv(opt.features.inliers_out);
+  const nlohmann::json features_summary = diagnostics.summary(system, opt.features);
   const auto stats = system.mapping_stats();
   const auto relocalized = system.relocalized_frames();
   const long processed = frames.delivered();
@@ -204,7 +212,8 @@ nlohmann::json run_slam(const SlamOptions& opt) {
         {"global_ba_runs", lc.global_ba_runs},
         {"global_ba_aborted", lc.global_ba_aborted},
         {"global_ba_merged", lc.global_ba_merged}}},
-      {"vocabulary", system.vocabulary() ? so.vocabulary.empty() ? slam::default_vocabulary_path().string() : so.vocabulary.string() : ""},
+      {"vocabulary", system.vocabulary() ? so.vocabulary.empty() ? slam::default_vocabulary_path(so.descriptor).string() : so.vocabulary.string() : ""},
+      {"features", features_summary},
       {"mode_switches", switches},
       {"map_in", map_in_json},
       {"map_out", map_out_json},
@@ -246,7 +255,9 @@ const bool registered_slam = register_command({
                      "With --world camera or --ogm-world camera: first camera above the floor, m")
           ->capture_default_str();
       cmd.add_option("--vocabulary", opt->vocabulary,
-                     "Bag-of-words vocabulary for relocalization (default: the shipped data/vocab/orb_k10_L4.bsvoc)");
+                     "Bag-of-words vocabulary for relocalization (default: the shipped data/vocab/orb_k10_L4.bsvoc, "
+                     "saft_k10_L4.bsvoc with --descriptor saft)");
+      opt->features.add_to(cmd);
       cmd.add_flag("--no-relocalization", opt->no_relocalization,
                    "When lost, only match the last reference keyframe (no place recognition)");
       cmd.add_flag("--no-loop-closing", opt->no_loop_closing,

@@ -18,6 +18,7 @@
 #include "core/settings_file.hpp"
 #include "core/stage_timer.hpp"
 #include "features/bow_vocabulary.hpp"
+#include "features/feature_extractor.hpp"
 #include "features/orb_extractor.hpp"
 #include "io/tum_dataset.hpp"
 
@@ -33,6 +34,8 @@ struct VocabOptions {
   long max_frames = 0;  // per dataset or folder, evenly spaced; 0 = all
   int iterations = 10;
   std::uint64_t seed = 1;
+  std::string descriptor = "orb";
+  std::filesystem::path saft_weights;
 };
 
 // Indices 0..n-1, or `max` of them evenly spaced.
@@ -67,7 +70,9 @@ nlohmann::json run_train(const VocabOptions& opt) {
   StageTimer timer;
   std::vector<cv::Mat> images;
   std::size_t descriptors = 0, skipped = 0;
-  auto extract = [&](OrbExtractor& orb, const cv::Mat& img) {
+  const DescriptorChoice choice = parse_descriptor_choice(opt.descriptor);
+  if (choice == DescriptorChoice::kOrb && !opt.saft_weights.empty()) throw InputError("--saft-weights needs --descriptor saft");
+  auto extract = [&](FeatureExtractor& orb, const cv::Mat& img) {
     const auto start = std::chrono::steady_clock::now();
     std::vector<cv::KeyPoint> keys;
     cv::Mat d;
@@ -78,7 +83,9 @@ nlohmann::json run_train(const VocabOptions& opt) {
   };
   for (const auto& dir : opt.datasets) {
     const TumDataset data = TumDataset::open(dir);
-    OrbExtractor orb(OrbExtractorOptions::from_settings(SettingsFile::load(dir / "camera.yaml")));
+    const auto extractor =
+        make_feature_extractor(choice, OrbExtractorOptions::from_settings(SettingsFile::load(dir / "camera.yaml")), opt.saft_weights);
+    FeatureExtractor& orb = *extractor;
     const auto idx = pick(data.size(), opt.max_frames);
     Progress progress("vocab " + dir.filename().string(), idx.size());
     for (std::size_t j = 0; j < idx.size(); ++j) {
@@ -101,7 +108,8 @@ nlohmann::json run_train(const VocabOptions& opt) {
       if (ext == ".png" || ext == ".jpg" || ext == ".jpeg" || ext == ".bmp" || ext == ".pgm" || ext == ".ppm") files.push_back(e.path());
     }
     std::sort(files.begin(), files.end());  // directory order is not stable; the result must be
-    OrbExtractor orb;
+    const auto extractor = make_feature_extractor(choice, OrbExtractorOptions{}, opt.saft_weights);
+    FeatureExtractor& orb = *extractor;
     for (std::size_t i : pick(files.size(), opt.max_frames)) {
       const cv::Mat img = cv::imread(files[i].string(), cv::IMREAD_UNCHANGED);
       if (img.empty()) {
@@ -123,6 +131,7 @@ nlohmann::json run_train(const VocabOptions& opt) {
   const auto bytes = std::filesystem::file_size(opt.out);
   spdlog::info("vocab: {} words, {} nodes, {} bytes -> {}", voc.word_count(), voc.node_count(), bytes, opt.out.string());
   return {{"images", images.size()},
+          {"descriptor", opt.descriptor},
           {"skipped_images", skipped},
           {"descriptors", descriptors},
           {"k", opt.k},
@@ -139,7 +148,7 @@ const bool group_vocab = register_group("vocab", "Bag-of-words vocabularies for 
 
 const bool registered_vocab = register_command({
     .path = {"vocab", "train"},
-    .description = "Train a bag-of-words vocabulary (hierarchical k-means on ORB descriptors)",
+    .description = "Train a bag-of-words vocabulary (hierarchical k-means on ORB or SAFT descriptors)",
     .setup = [](CLI::App& cmd) -> Action {
       auto opt = std::make_shared<VocabOptions>();
       cmd.add_option("--dataset", opt->datasets, "TUM-layout folder(s) (camera.yaml gives the ORB settings)");
@@ -150,6 +159,8 @@ const bool registered_vocab = register_command({
       cmd.add_option("--max-frames", opt->max_frames, "Per dataset or folder: at most N evenly spaced frames (0 = all)");
       cmd.add_option("--iterations", opt->iterations, "k-means iterations per node")->capture_default_str();
       cmd.add_option("--seed", opt->seed, "Seed of the k-means++ seeding")->capture_default_str();
+      cmd.add_option("--descriptor", opt->descriptor, "Descriptor to cluster: orb or saft")->capture_default_str();
+      cmd.add_option("--saft-weights", opt->saft_weights, "SAFT weights (default: the shipped data/saft/saft_v1.saft)");
       return [opt] { return run_train(*opt); };
     },
     .order = 45});

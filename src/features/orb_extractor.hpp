@@ -8,6 +8,7 @@
 
 #include <opencv2/core.hpp>
 
+#include "features/feature_extractor.hpp"
 #include "features/keypoint_distribution.hpp"
 
 namespace builtscene {
@@ -51,14 +52,14 @@ struct ScalePyramid {
   int levels() const { return static_cast<int>(scale.size()); }
 };
 
-class OrbExtractor {
+class OrbExtractor : public FeatureExtractor {
  public:
   explicit OrbExtractor(OrbExtractorOptions options = {});
 
   // Grayscale 8-bit image in; keypoints in level-0 pixel coordinates (octave = level,
   // angle in degrees, size = patch diameter at that level) and one 32-byte descriptor row
   // per keypoint. An image too small for the pyramid gives no keypoints.
-  void extract(const cv::Mat& gray, std::vector<cv::KeyPoint>& keypoints, cv::Mat& descriptors);
+  void extract(const cv::Mat& gray, std::vector<cv::KeyPoint>& keypoints, cv::Mat& descriptors) override;
 
   // Orientation and descriptor at given keypoints instead of detected ones (for positions
   // mapped from another image by a known homography): `pt` in level-0 pixels, `octave` the
@@ -70,7 +71,8 @@ class OrbExtractor {
   static int border();
 
   const OrbExtractorOptions& options() const { return options_; }
-  const ScalePyramid& pyramid() const { return pyramid_; }
+  const ScalePyramid& pyramid() const override { return pyramid_; }
+  DescriptorMetric metric() const override { return DescriptorMetric::orb(); }
   // The image pyramid of the last extract() call (level 0 = the input).
   const std::vector<cv::Mat>& levels() const { return levels_; }
   // The last extract() call's noise estimate (grey levels) and the fallback FAST threshold

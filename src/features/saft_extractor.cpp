@@ -12,13 +12,14 @@ void SaftExtractor::extract(const cv::Mat& gray, std::vector<cv::KeyPoint>& keyp
   orb_.extract(gray, keypoints, binary);
   if (keypoints.empty()) {
     descriptors = cv::Mat(0, SaftNetwork::kDimension, CV_32F);
+    patches_ = cv::Mat(0, kSaftPatchPixels, CV_8U);
     return;
   }
-  const cv::Mat patches = normalize_saft_patches(sample_saft_patches(orb_.levels(), orb_.pyramid().inv_scale, keypoints));
-  network_.describe(patches, descriptors);
+  patches_ = sample_saft_patches(orb_.levels(), orb_.pyramid().inv_scale, keypoints);
+  network_.describe(normalize_saft_patches(patches_), descriptors);
 }
 
-DescriptorMetric SaftExtractor::metric() {
+DescriptorMetric SaftExtractor::saft_metric() {
   DescriptorMetric m = DescriptorMetric::float_l2(SaftNetwork::kDimension);
   // The distances that accept as many true matches as ORB's Hamming 50 / 100 on the
   // patch-verification pairs of `saft eval` (docs/saft.md, saft_threshold_same_tpr).

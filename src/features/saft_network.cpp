@@ -5,6 +5,7 @@
 #include <cstring>
 #include <fstream>
 #include <malloc.h>
+#include <stdexcept>
 #include <vector>
 
 #include "core/errors.hpp"
@@ -151,6 +152,28 @@ long SaftNetwork::parameter_count() const {
   long total = 0;
   for (auto& t : stored_tensors(impl_->net)) total += t.numel();
   return total;
+}
+
+std::vector<float> SaftNetwork::weights() const {
+  std::vector<float> out;
+  out.reserve(static_cast<std::size_t>(parameter_count()));
+  for (auto& t : stored_tensors(impl_->net)) {
+    const torch::Tensor c = t.detach().contiguous();
+    out.insert(out.end(), c.data_ptr<float>(), c.data_ptr<float>() + c.numel());
+  }
+  return out;
+}
+
+void SaftNetwork::set_weights(const std::vector<float>& values) {
+  if (static_cast<long>(values.size()) != parameter_count())
+    throw std::invalid_argument("SAFT weights: " + std::to_string(values.size()) + " values, the network has " +
+                                std::to_string(parameter_count()));
+  torch::NoGradGuard no_grad;
+  std::size_t at = 0;
+  for (auto& t : stored_tensors(impl_->net)) {
+    t.copy_(torch::from_blob(const_cast<float*>(values.data() + at), t.sizes(), torch::kFloat32));
+    at += static_cast<std::size_t>(t.numel());
+  }
 }
 
 std::filesystem::path SaftNetwork::default_weights_path() { return BUILTSCENE_SAFT_WEIGHTS; }

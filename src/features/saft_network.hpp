@@ -6,12 +6,14 @@
 #include <filesystem>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include <opencv2/core.hpp>
 
 namespace builtscene {
 
 class SaftTrainer;
+class SaftOnlineTrainer;
 
 struct SaftNetworkOptions {
   // Patches per forward pass. Fixed so that every call reuses the same shapes (the last
@@ -49,6 +51,12 @@ class SaftNetwork {
   // Number of stored floats (parameters and batch-norm statistics).
   long parameter_count() const;
 
+  // Every stored float (parameters, then batch-norm statistics, in file order), and back:
+  // how fine-tuned weights reach the prediction net (a copy of parameter_count() floats,
+  // about 0.1 ms). set_weights throws std::invalid_argument on a length mismatch.
+  std::vector<float> weights() const;
+  void set_weights(const std::vector<float>& values);
+
   // The weights shipped in the repository (data/saft/saft_v1.saft in the source tree).
   static std::filesystem::path default_weights_path();
 
@@ -56,6 +64,7 @@ class SaftNetwork {
 
  private:
   friend class SaftTrainer;
+  friend class SaftOnlineTrainer;
   struct Impl;
   SaftNetworkOptions options_;
   std::unique_ptr<Impl> impl_;

@@ -1,7 +1,11 @@
 #include "features/saft_trainer.hpp"
 
+#include <algorithm>
 #include <cstring>
+#include <numeric>
 #include <random>
+
+#include <opencv2/core.hpp>
 
 #include "core/errors.hpp"
 #include "features/saft_patch.hpp"
@@ -115,5 +119,114 @@ SaftTrainingStep SaftTrainer::train(SaftNetwork& network, const SaftPairPool& po
   last.accuracy = tail_acc / tail_n;
   return last;
 }
+
+cv::Mat augment_saft_patch(const cv::Mat& row, int op) {
+  CV_Assert(row.rows == 1 && row.cols == kSaftPatchPixels && row.type() == CV_8U);
+  const cv::Mat square = row.reshape(1, kSaftPatchSize);
+  cv::Mat out;
+  switch (op) {
+    case 1: cv::flip(square, out, 1); break;
+    case 2: cv::flip(square, out, 0); break;
+    case 3: cv::rotate(square, out, cv::ROTATE_90_CLOCKWISE); break;
+    case 4: cv::rotate(square, out, cv::ROTATE_180); break;
+    case 5: cv::rotate(square, out, cv::ROTATE_90_COUNTERCLOCKWISE); break;
+    default: out = square.clone();
+  }
+  return out.reshape(1, 1);
+}
+
+struct SaftOnlineTrainer::Impl {
+  Impl(const SaftNetwork& start, const SaftOnlineOptions& o)
+      : options(o), network(SaftNetworkOptions{.batch_size = 1, .threads = o.threads}), rng(o.seed) {
+    network.set_weights(start.weights());
+    auto& net = network.impl_->net;
+    std::vector<torch::Tensor> params = net->parameters();
+    params.push_back(w);
+    params.push_back(b);
+    optimizer = std::make_unique<torch::optim::Adam>(params, torch::optim::AdamOptions(o.learning_rate));
+  }
+  SaftOnlineOptions options;
+  SaftNetwork network;
+  // The hinge decision o = w (b - d^2), as offline; starts where offline training starts.
+  torch::Tensor w = torch::full({1}, 2.0, torch::requires_grad());
+  torch::Tensor b = torch::full({1}, 1.0, torch::requires_grad());
+  std::unique_ptr<torch::optim::Adam> optimizer;
+  std::mt19937_64 rng;
+  int steps = 0;
+
+  // Hinge loss and accuracy of pairs [index] (first / second already augmented rows).
+  std::pair<torch::Tensor, double> loss_of(const cv::Mat& first, const cv::Mat& second, const std::vector<int>& labels) {
+    const int n = first.rows;
+    auto& net = network.impl_->net;
+    const torch::Tensor x = torch::cat({to_tensor(normalize_saft_patches(first)), to_tensor(normalize_saft_patches(second))});
+    const torch::Tensor d = torch::nn::functional::normalize(net->forward(x), torch::nn::functional::NormalizeFuncOptions().dim(1));
+    const torch::Tensor d2 = (d.narrow(0, 0, n) - d.narrow(0, n, n)).pow(2).sum(1);
+    std::vector<float> y(labels.begin(), labels.end());
+    const torch::Tensor yt = torch::from_blob(y.data(), {n}, torch::kFloat32).clone();
+    const torch::Tensor o = w * (b - d2);
+    const torch::Tensor loss = torch::relu(1 - yt * o).mean();
+    const double acc = (yt * o > 0).to(torch::kFloat32).mean().item<double>();
+    return {loss, acc};
+  }
+};
+
+SaftOnlineTrainer::SaftOnlineTrainer(const SaftNetwork& start, SaftOnlineOptions options)
+    : impl_(std::make_unique<Impl>(start, options)) {
+  if (options.batch_pairs < 2) throw InputError("SAFT online learning: batch pairs must be at least 2");
+}
+
+SaftOnlineTrainer::~SaftOnlineTrainer() = default;
+
+SaftTrainingStep SaftOnlineTrainer::train(const SaftLabelledPairs& pairs) {
+  SaftTrainingStep result;
+  const int n = pairs.size();
+  if (n == 0) return result;
+  CV_Assert(pairs.second.rows == n && static_cast<int>(pairs.label.size()) == n);
+  torch::set_num_threads(impl_->options.threads);
+  auto& net = impl_->network.impl_->net;
+  net->eval();  // frozen batch-norm statistics, see the header
+  std::vector<int> order(static_cast<std::size_t>(n));
+  std::iota(order.begin(), order.end(), 0);
+  std::shuffle(order.begin(), order.end(), impl_->rng);
+  std::uniform_int_distribution<int> pick_op(0, 5);
+  double loss_sum = 0, acc_sum = 0;
+  int batches = 0;
+  for (int start = 0; start < n; start += impl_->options.batch_pairs) {
+    const int m = std::min(impl_->options.batch_pairs, n - start);
+    cv::Mat first(m, kSaftPatchPixels, CV_8U), second(m, kSaftPatchPixels, CV_8U);
+    std::vector<int> labels(static_cast<std::size_t>(m));
+    for (int k = 0; k < m; ++k) {
+      const int i = order[static_cast<std::size_t>(start + k)];
+      const int op = pick_op(impl_->rng);
+      augment_saft_patch(pairs.first.row(i), op).copyTo(first.row(k));
+      augment_saft_patch(pairs.second.row(i), op).copyTo(second.row(k));
+      labels[static_cast<std::size_t>(k)] = pairs.label[static_cast<std::size_t>(i)];
+    }
+    auto [loss, acc] = impl_->loss_of(first, second, labels);
+    impl_->optimizer->zero_grad();
+    loss.backward();
+    impl_->optimizer->step();
+    ++impl_->steps;
+    loss_sum += loss.item<double>();
+    acc_sum += acc;
+    ++batches;
+  }
+  result.step = impl_->steps;
+  result.loss = loss_sum / batches;
+  result.accuracy = acc_sum / batches;
+  return result;
+}
+
+double SaftOnlineTrainer::accuracy(const SaftLabelledPairs& pairs) {
+  if (pairs.size() == 0) return 0.0;
+  torch::set_num_threads(impl_->options.threads);
+  c10::InferenceMode guard;
+  impl_->network.impl_->net->eval();
+  return impl_->loss_of(pairs.first, pairs.second, pairs.label).second;
+}
+
+std::vector<float> SaftOnlineTrainer::weights() const { return impl_->network.weights(); }
+
+int SaftOnlineTrainer::steps() const { return impl_->steps; }
 
 }  // namespace builtscene

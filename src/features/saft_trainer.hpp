@@ -5,6 +5,7 @@
 // distance of the normalized descriptors, the distance the SLAM matches with).
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -41,5 +42,59 @@ class SaftTrainer {
   static SaftTrainingStep train(SaftNetwork& net, const SaftPairPool& pool, const SaftTrainerOptions& options,
                                 const std::function<void(const SaftTrainingStep&)>& on_step = {});
 };
+
+// Online fine-tuning (the source's section 3.4.3): labelled pairs of 8-bit patches from the
+// SLAM's verified matches: label +1 for two observations of one map point, -1 for two
+// different map points.
+struct SaftLabelledPairs {
+  cv::Mat first, second;   // one sample_saft_patches row each
+  std::vector<int> label;  // +1 / -1
+  // Where each patch came from (frame id, keypoint index and pixel), for checks against
+  // ground truth; optional for training.
+  struct Source {
+    long frame = -1;
+    int keypoint = -1;
+    cv::Point2f pixel;
+  };
+  std::vector<Source> first_source, second_source;
+  int size() const { return first.rows; }
+};
+
+struct SaftOnlineOptions {
+  double learning_rate = 1e-4;  // fixed, the source's online rate
+  int batch_pairs = 128;        // pairs per optimizer step
+  std::uint64_t seed = 1;
+  int threads = 1;
+};
+
+// Owns a copy of the network being fine-tuned (the prediction net stays the caller's) and
+// its optimizer state across calls. Batch-norm statistics stay frozen at the pre-trained
+// ones (the network runs in eval mode while it learns): online batches are small and all of
+// one scene, and frozen statistics keep the fine-tuned transform close to the global one.
+class SaftOnlineTrainer {
+ public:
+  SaftOnlineTrainer(const SaftNetwork& start, SaftOnlineOptions options = {});
+  ~SaftOnlineTrainer();
+  SaftOnlineTrainer(const SaftOnlineTrainer&) = delete;
+  SaftOnlineTrainer& operator=(const SaftOnlineTrainer&) = delete;
+
+  // One pass over `pairs`: shuffled, each pair flipped (horizontally or vertically) or
+  // rotated (90, 180, 270 degrees) at random, one hinge-loss step per batch_pairs pairs.
+  // Returns the pass's mean loss and the accuracy measured before each step's update.
+  SaftTrainingStep train(const SaftLabelledPairs& pairs);
+  // Accuracy of the current weights on `pairs` (no augmentation, no update).
+  double accuracy(const SaftLabelledPairs& pairs);
+  std::vector<float> weights() const;  // for SaftNetwork::set_weights
+  int steps() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+// The same random flip or rotation applied to both patches of a pair (a 32 x 32 patch as
+// one 8-bit row): op 0 keeps it, 1 flips horizontally, 2 vertically, 3/4/5 rotate by
+// 90/180/270 degrees.
+cv::Mat augment_saft_patch(const cv::Mat& row, int op);
 
 }  // namespace builtscene

@@ -89,7 +89,7 @@ void build_feature_grid(FrameFeatures& f) {
 }
 
 std::shared_ptr<const FrameFeatures> make_rgbd_features(const cv::Mat& gray, const cv::Mat& depth_m,
-                                                        std::shared_ptr<const FrameContext> ctx, OrbExtractor& extractor) {
+                                                        std::shared_ptr<const FrameContext> ctx, FeatureExtractor& extractor) {
   auto f = std::make_shared<FrameFeatures>();
   f->ctx = ctx;
   extractor.extract(gray, f->keys, f->descriptors);

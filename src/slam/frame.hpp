@@ -68,7 +68,7 @@ void build_feature_grid(FrameFeatures& f);
 
 // Extracts ORB from `gray` and reads depth (metres, CV_32F, same size) at each keypoint.
 std::shared_ptr<const FrameFeatures> make_rgbd_features(const cv::Mat& gray, const cv::Mat& depth_m,
-                                                        std::shared_ptr<const FrameContext> ctx, OrbExtractor& extractor);
+                                                        std::shared_ptr<const FrameContext> ctx, FeatureExtractor& extractor);
 
 class Frame {
  public:

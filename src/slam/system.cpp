@@ -11,24 +11,34 @@
 #include "slam/key_frame.hpp"
 #include "slam/keyframe_database.hpp"
 #include "slam/relocalizer.hpp"
+#include "features/saft_extractor.hpp"
 
 namespace builtscene::slam {
 
-std::filesystem::path default_vocabulary_path() {
-  for (const char* p : {BUILTSCENE_SOURCE_VOCABULARY, BUILTSCENE_INSTALLED_VOCABULARY})
+std::filesystem::path default_vocabulary_path(DescriptorChoice descriptor) {
+  const char* name = descriptor == DescriptorChoice::kOrb ? "orb_k10_L4.bsvoc" : "saft_k10_L4.bsvoc";
+  for (const char* dir : {BUILTSCENE_SOURCE_VOCABULARY_DIR, BUILTSCENE_INSTALLED_VOCABULARY_DIR}) {
+    const auto p = std::filesystem::path(dir) / name;
     if (std::filesystem::is_regular_file(p)) return p;
+  }
   return {};
 }
 
 System::System(const RgbdCameraSettings& settings, SystemOptions options)
-    : settings_(settings), options_(options), extractor_(options.orb) {
-  ctx_ = FrameContext::make(settings_, extractor_.pyramid(), DescriptorMetric::orb());
+    : settings_(settings), options_(options),
+      extractor_(make_feature_extractor(options.descriptor, options.orb, options.saft_weights)) {
+  ctx_ = FrameContext::make(settings_, extractor_->pyramid(), extractor_->metric());
+  if (options_.descriptor == DescriptorChoice::kSaft) {
+    saft_ = static_cast<SaftExtractor*>(extractor_.get());
+    learning_ = std::make_unique<SaftLearning>(*saft_, options_.saft_learning);
+  }
   options_.tracking.max_frames_between_kf = std::max(1, static_cast<int>(std::lround(settings_.fps)));
   mapping_ = std::make_unique<LocalMapping>(map_, options_.mapping, &timer_);
   tracker_ = std::make_unique<Tracker>(ctx_, map_, mapping_.get(), options_.tracking, &timer_);
-  const auto vocabulary_file = options_.vocabulary.empty() ? default_vocabulary_path() : options_.vocabulary;
+  const auto vocabulary_file = options_.vocabulary.empty() ? default_vocabulary_path(options_.descriptor) : options_.vocabulary;
   if (vocabulary_file.empty()) {
-    spdlog::warn("no bag-of-words vocabulary (looked for {}): relocalization off", BUILTSCENE_SOURCE_VOCABULARY);
+    spdlog::warn("no bag-of-words vocabulary for {} descriptors (looked in {}): relocalization off", to_string(options_.descriptor),
+                 BUILTSCENE_SOURCE_VOCABULARY_DIR);
   } else {
     auto voc = std::make_shared<BowVocabulary>(BowVocabulary::load(vocabulary_file));
     if (voc->kind() != ctx_->metric.kind)
@@ -68,11 +78,14 @@ TrackingOutcome System::track_rgbd(const cv::Mat& image, const cv::Mat& depth_m,
   else if (image.channels() == 4) cv::cvtColor(image, gray, settings_.rgb_order ? cv::COLOR_RGBA2GRAY : cv::COLOR_BGRA2GRAY);
   else gray = image;
   if (gray.depth() != CV_8U) gray.convertTo(gray, CV_8U);
-  auto features = make_rgbd_features(gray, depth_m, ctx_, extractor_);
-  timer_.add("extraction", ms_since(start));
+  if (learning_ && learning_->install_weights()) timer_.add("saft_weights", ms_since(start));
+  const auto t_extract = std::chrono::steady_clock::now();
+  auto features = make_rgbd_features(gray, depth_m, ctx_, *extractor_);
+  timer_.add("extraction", ms_since(t_extract));
   const auto t0 = std::chrono::steady_clock::now();
   const int keypoints = static_cast<int>(features->size());
-  Frame frame(next_frame_id_++, timestamp, std::move(features));
+  const long frame_id = next_frame_id_++;
+  Frame frame(frame_id, timestamp, std::move(features));
   tracker_->set_images(gray, depth_m);
   TrackingOutcome out = tracker_->track(std::move(frame));
   out.keypoints = keypoints;
@@ -85,6 +98,16 @@ TrackingOutcome System::track_rgbd(const cv::Mat& image, const cv::Mat& depth_m,
     std::lock_guard lock(map_.mutex());
     if (const auto& kf = tracker_->records().back().reference) database_->add(kf);
     timer_.add("keyframe_bow", ms_since(t_bow));
+  }
+  if (learning_ && learning_->options().mode != SaftLearningMode::kOffline) {
+    // Training pairs from this frame's verified matches (saft_learning.hpp).
+    const auto t_learn = std::chrono::steady_clock::now();
+    if (out.new_keyframe) learning_->add_keyframe(frame_id, saft_->last_patches());
+    if (out.state == TrackingState::kOk) {
+      std::lock_guard lock(map_.mutex());
+      learning_->prepare(tracker_->last_frame(), saft_->last_patches());
+    }
+    timer_.add("saft_prepare", ms_since(t_learn));
   }
   if (!options_.mapping_thread) {
     mapping_->run_pending();
@@ -108,6 +131,7 @@ TrackingOutcome System::track_rgbd(const cv::Mat& image, const cv::Mat& depth_m,
 void System::shutdown() {
   if (shut_down_) return;
   shut_down_ = true;
+  if (learning_) learning_->finish();
   mapping_->run_pending();
   mapping_->finish();
   // After local mapping: its last keyframes still go through loop detection.

@@ -27,6 +27,7 @@
 
 #include "core/camera.hpp"
 #include "core/stage_timer.hpp"
+#include "features/feature_extractor.hpp"
 #include "features/orb_extractor.hpp"
 #include "io/trajectory.hpp"
 #include "slam/local_mapping.hpp"
@@ -35,6 +36,7 @@
 #include "slam/map.hpp"
 #include "slam/map_serializer.hpp"
 #include "slam/mode_plan.hpp"
+#include "slam/saft_learning.hpp"
 #include "slam/tracking.hpp"
 
 namespace builtscene {
@@ -45,6 +47,12 @@ namespace builtscene::slam {
 
 struct SystemOptions {
   OrbExtractorOptions orb;
+  // Descriptor of every feature (tracking, mapping, place recognition, saved maps): ORB's
+  // binary one or SAFT's learned one (ORB's keypoints; docs/saft.md). SAFT: the weights in
+  // `saft_weights` (empty: the shipped ones) and online learning as `saft_learning` says.
+  DescriptorChoice descriptor = DescriptorChoice::kOrb;
+  std::filesystem::path saft_weights;
+  SaftLearningOptions saft_learning;
   TrackingOptions tracking;
   LocalMappingOptions mapping;
   bool mapping_thread = true;  // false: local mapping runs inline after each keyframe (deterministic)
@@ -62,9 +70,10 @@ struct SystemOptions {
 // A fingerprint of a vocabulary, stored in saved maps (never 0).
 std::uint64_t vocabulary_checksum(const BowVocabulary& vocabulary);
 
-// The shipped ORB vocabulary: the source tree's data/vocab/orb_k10_L4.bsvoc, else the
-// installed copy; empty when neither exists.
-std::filesystem::path default_vocabulary_path();
+// The shipped vocabulary for a descriptor: the source tree's data/vocab/orb_k10_L4.bsvoc
+// (ORB) or saft_k10_L4.bsvoc (SAFT, made with the shipped weights), else the installed copy;
+// empty when neither exists.
+std::filesystem::path default_vocabulary_path(DescriptorChoice descriptor = DescriptorChoice::kOrb);
 
 class KeyFrameDatabase;
 class Relocalizer;
@@ -140,12 +149,17 @@ class System {
   std::vector<LoopEvent> loop_events() const;
   LoopCloser::Stats loop_closing_stats() const;
   bool loop_closing_enabled() const { return loop_closer_ != nullptr; }
+  // SAFT online learning; null with ORB descriptors.
+  const SaftLearning* saft_learning() const { return learning_.get(); }
+  SaftExtractor* saft_extractor() { return saft_; }
 
  private:
   RgbdCameraSettings settings_;
   SystemOptions options_;
   StageTimer timer_;
-  OrbExtractor extractor_;
+  std::unique_ptr<FeatureExtractor> extractor_;
+  SaftExtractor* saft_ = nullptr;  // extractor_ when it is SAFT's
+  std::unique_ptr<SaftLearning> learning_;
   std::shared_ptr<const FrameContext> ctx_;
   Map map_;
   std::unique_ptr<LocalMapping> mapping_;

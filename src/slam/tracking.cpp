@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <tuple>
 #include <unordered_map>
 
 #include "slam/key_frame.hpp"
@@ -38,6 +39,7 @@ void Tracker::reset() {
 TrackingOutcome Tracker::track(Frame frame) {
   current_ = std::move(frame);
   TrackingOutcome out;
+  initial_counts_ = local_map_counts_ = {0, 0};
   std::unique_lock lock(map_.mutex());
   bool ok = false;
   bool relocalized = false;
@@ -142,6 +144,8 @@ TrackingOutcome Tracker::track(Frame frame) {
     rec.T_cr = current_.T_cw * current_.reference->pose_inverse();
   }
   records_.push_back(rec);
+  std::tie(out.initial_matches, out.initial_inliers) = initial_counts_;
+  std::tie(out.local_map_matches, out.local_map_inliers) = local_map_counts_;
   if (state_ == TrackingState::kOk) {
     last_ = std::move(current_);
     has_last_ = true;
@@ -268,7 +272,18 @@ void Tracker::update_last_frame() {
   }
 }
 
+std::pair<int, int> Tracker::match_counts() const {
+  int matches = 0, inliers = 0;
+  for (std::size_t i = 0; i < current_.points.size(); ++i) {
+    if (!current_.points[i]) continue;
+    ++matches;
+    if (!current_.outlier[i]) ++inliers;
+  }
+  return {matches, inliers};
+}
+
 int Tracker::discard_outliers() {
+  initial_counts_ = match_counts();
   int real = 0;
   for (std::size_t i = 0; i < current_.points.size(); ++i) {
     if (!current_.points[i]) continue;
@@ -429,6 +444,7 @@ bool Tracker::track_local_map() {
   }
   search_local_points(current_, candidates, opt_.local_map_radius);
   optimize_frame_pose(current_);
+  local_map_counts_ = match_counts();
   inliers_ = odometry_inliers_ = 0;
   for (std::size_t i = 0; i < current_.points.size(); ++i) {
     const auto& p = current_.points[i];

@@ -10,6 +10,7 @@
 #include <functional>
 #include <deque>
 #include <memory>
+#include <utility>
 #include <vector>
 
 #include "core/stage_timer.hpp"
@@ -53,6 +54,11 @@ struct TrackingOutcome {
   int keypoints = 0;            // features extracted from the frame
   bool new_keyframe = false;
   bool used_motion_model = false;
+  // Matches and inliers of the pose optimizations (the source's Figure 3.13 plots their
+  // ratio): after the initial pose (motion model, reference keyframe or relocalization) and
+  // after local-map tracking; 0 / 0 when that step did not run.
+  int initial_matches = 0, initial_inliers = 0;
+  int local_map_matches = 0, local_map_inliers = 0;
 };
 
 // Where new keyframes go (local mapping); an interface so tracking can be tested alone.
@@ -82,6 +88,9 @@ class Tracker {
     bool tracked = false;
   };
   const std::vector<FrameRecord>& records() const { return records_; }
+  // The frame last passed to track() when it was tracked (its inlier matches to map points
+  // kept), for online learning; read with the map lock held.
+  const Frame& last_frame() const { return last_; }
   void reset();
 
   // Localization mode turns keyframe creation (and so map growth) off; with it off an empty
@@ -156,6 +165,9 @@ class Tracker {
   bool track_local_map();
   void update_local_map();
   int discard_outliers();  // returns matches to real map points
+  // Matches and inliers of the current frame, for TrackingOutcome's ratios.
+  std::pair<int, int> match_counts() const;
+  std::pair<int, int> initial_counts_{0, 0}, local_map_counts_{0, 0};
   bool need_new_keyframe() const;
   void create_new_keyframe();
 };

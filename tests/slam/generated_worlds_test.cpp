@@ -14,7 +14,7 @@
 #include "eval/trajectory_error.hpp"
 #include "io/tum_dataset.hpp"
 #include "slam/system.hpp"
-#include "synth/rgbd_sequence_writer.hpp"
+#include "generated_world.hpp"
 
 namespace builtscene::slam {
 namespace {
@@ -27,28 +27,6 @@ struct WorldRun {
   AteResult ate;
   double sim3_scale = 0;  // est -> truth; 1 when the trajectory has the true size
   double end_drift_m = 0;  // last tracked pose against the truth, after the se3 alignment
-};
-
-// A generated world in a temporary folder, removed on every exit (also when a check throws:
-// a folder of 300 frames is 250 MB).
-struct GeneratedWorld {
-  std::filesystem::path dir;
-  GeneratedWorld(const std::string& scene, synth::MotionKind motion, std::uint64_t seed, int frames) {
-    synth::RgbdSequenceOptions o;
-    o.scene = scene;
-    o.motion = motion;
-    o.seed = seed;
-    o.frames = frames;
-    o.kinect_noise = true;
-    o.out = std::filesystem::temp_directory_path() /
-            ("builtscene_slam_world_" + scene + "_" + std::to_string(seed) + "_" + std::to_string(::getpid()));
-    dir = o.out;
-    std::filesystem::remove_all(dir);
-    synth::generate_rgbd_sequence(o);
-  }
-  ~GeneratedWorld() { std::filesystem::remove_all(dir); }
-  GeneratedWorld(const GeneratedWorld&) = delete;
-  GeneratedWorld& operator=(const GeneratedWorld&) = delete;
 };
 
 WorldRun track(const std::filesystem::path& dir) {

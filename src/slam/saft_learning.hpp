@@ -1,0 +1,122 @@
+#pragma once
+// Online SAFT learning inside the SLAM (the source's section 3.4.3).
+//
+// Tracking thread, after each tracked frame (map lock held): prepare() turns the frame's
+// inlier map points into labelled patch pairs. For every map point the frame matched, its
+// observation list is the frame's patch plus the patches of the recent keyframes that observe
+// it; a positive pair is two patches of one list, a negative pair patches of two lists, as
+// many negatives as positives. The batch goes into a one-slot LIFO: the newest batch
+// replaces one the learning thread has not taken yet (counted as dropped).
+//
+// Learning thread: takes the newest batch, fine-tunes its own copy of the network
+// (SaftOnlineTrainer: flips and rotations, fixed learning rate), and publishes weights:
+//   continuous  after every consumed batch (one pass over it);
+//   discrete    when a pass over the batch reaches `target_accuracy` (it keeps passing over
+//               the same batch until then, at most `max_passes`), the source's "delayed
+//               overfitting";
+//   offline     no learning thread; the pre-trained net stays.
+// Tracking thread, before extracting the next frame: install_weights() copies published
+// weights into the prediction net (a copy of ~90k floats: tracking never waits for training).
+// The thread runs at a lower scheduling priority (nice +10), so it uses what tracking and
+// local mapping leave of the CPU.
+//
+// Map-point descriptors are not re-computed when the net changes: as in the source, the
+// fine-tuned transform stays close to the pre-trained one, and each point's representative
+// descriptor is re-chosen among its observations as keyframes arrive. The bag of words keeps
+// the vocabulary trained with the pre-trained net. docs/saft.md measures how far descriptors
+// move over a run (descriptor_drift()).
+#include <atomic>
+#include <condition_variable>
+#include <cstdint>
+#include <deque>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <thread>
+#include <utility>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "features/saft_trainer.hpp"
+
+namespace builtscene {
+class SaftExtractor;
+}
+
+namespace builtscene::slam {
+
+class Frame;
+
+enum class SaftLearningMode { kOffline, kContinuous, kDiscrete };
+SaftLearningMode parse_saft_learning_mode(const std::string& name);  // offline|continuous|discrete; InputError
+std::string to_string(SaftLearningMode mode);
+
+struct SaftLearningOptions {
+  SaftLearningMode mode = SaftLearningMode::kOffline;
+  double learning_rate = 1e-4;
+  int positive_pairs = 128;       // per prepared batch (and as many negatives)
+  int min_positive_pairs = 16;    // fewer: no batch from this frame
+  double target_accuracy = 0.98;  // discrete mode
+  int max_passes = 20;            // discrete mode: passes over one batch before giving up on it
+  int patch_keyframes = 30;       // newest keyframes whose patches are kept (1 KB per keypoint)
+  std::uint64_t seed = 1;
+  // Sees every prepared batch in the tracking thread (tests check pairs against ground truth).
+  std::function<void(const SaftLabelledPairs&)> on_batch;
+};
+
+class SaftLearning {
+ public:
+  struct Stats {
+    long frames = 0;            // frames prepare() saw
+    long batches_prepared = 0;
+    long batches_dropped = 0;   // replaced in the LIFO before the learner took them
+    long batches_trained = 0;   // taken by the learner
+    long passes = 0;            // training passes (discrete: several per batch)
+    long weight_updates = 0;    // weights installed in the prediction net
+    double last_accuracy = 0;   // of the last pass
+    double first_accuracy = 0;  // of the first pass (the pre-trained net on this scene)
+  };
+
+  // `extractor` is the SLAM's prediction net; it must outlive this object.
+  SaftLearning(SaftExtractor& extractor, SaftLearningOptions options);
+  ~SaftLearning();
+  SaftLearning(const SaftLearning&) = delete;
+  SaftLearning& operator=(const SaftLearning&) = delete;
+
+  const SaftLearningOptions& options() const { return options_; }
+
+  // Tracking thread. The patches of the frame just extracted (SaftExtractor::last_patches).
+  void add_keyframe(long frame_id, const cv::Mat& patches);
+  // Tracking thread, map lock held, `frame` tracked: prepares and queues a batch.
+  void prepare(const Frame& frame, const cv::Mat& patches);
+  // Tracking thread, before extraction: installs weights published since the last call.
+  bool install_weights();
+  // Stops the learning thread (idempotent).
+  void finish();
+  Stats stats() const;
+
+  // Labelled pairs prepare() would queue for this frame (exposed for tests).
+  SaftLabelledPairs make_pairs(const Frame& frame, const cv::Mat& patches);
+
+ private:
+  SaftExtractor& extractor_;
+  SaftLearningOptions options_;
+  std::deque<std::pair<long, cv::Mat>> keyframe_patches_;  // (frame id, patches), newest last
+  const cv::Mat* patches_of(long frame_id) const;
+  std::uint64_t rng_state_;
+
+  mutable std::mutex mutex_;  // guards everything below
+  std::condition_variable wake_;
+  std::optional<SaftLabelledPairs> slot_;
+  std::optional<std::vector<float>> published_;
+  bool stop_ = false;
+  Stats stats_;
+  std::unique_ptr<SaftOnlineTrainer> trainer_;  // learning thread only (after construction)
+  std::thread thread_;
+  void run();
+};
+
+}  // namespace builtscene::slam
