@@ -1,5 +1,5 @@
 #pragma once
-// A generated RGB-D world (builtscene synth rgbd, Kinect noise) in a temporary folder for
+// A generated RGB-D world (builtscene synth rgbd, Kinect noise unless told otherwise) in a temporary folder for
 // end-to-end tests, removed on every exit (also when a check throws: 300 frames are 250 MB).
 #include <unistd.h>
 
@@ -12,13 +12,13 @@ namespace builtscene::slam {
 
 struct GeneratedWorld {
   std::filesystem::path dir;
-  GeneratedWorld(const std::string& scene, synth::MotionKind motion, std::uint64_t seed, int frames) {
+  GeneratedWorld(const std::string& scene, synth::MotionKind motion, std::uint64_t seed, int frames, bool kinect_noise = true) {
     synth::RgbdSequenceOptions o;
     o.scene = scene;
     o.motion = motion;
     o.seed = seed;
     o.frames = frames;
-    o.kinect_noise = true;
+    o.kinect_noise = kinect_noise;
     o.out = std::filesystem::temp_directory_path() /
             ("builtscene_slam_world_" + scene + "_" + std::to_string(seed) + "_" + std::to_string(::getpid()));
     dir = o.out;
