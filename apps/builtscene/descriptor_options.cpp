@@ -18,6 +18,9 @@ void DescriptorOptions::add_to(CLI::App& cmd) {
   cmd.add_option("--saft-learning-rate", saft_learning_rate, "SAFT online learning rate (fixed)")->capture_default_str();
   cmd.add_option("--saft-target-accuracy", saft_target_accuracy, "Discrete SAFT: training accuracy that releases weights")
       ->capture_default_str();
+  cmd.add_option("--saft-anchor", saft_anchor,
+                 "SAFT online learning: weight of the pull towards the pre-trained descriptors (0 = none; docs/saft.md)")
+      ->capture_default_str();
   cmd.add_option("--saft-weights-out", saft_weights_out, "Output: the SAFT weights at the end of the run (fine-tuned)");
   cmd.add_option("--inliers-out", inliers_out,
                  "Output: CSV per frame of matches and inliers after the initial pose and after local-map tracking");
@@ -33,6 +36,8 @@ void DescriptorOptions::apply(slam::SystemOptions& so) const {
     throw InputError("--saft-target-accuracy: expected a value in (0, 1], got " + std::to_string(saft_target_accuracy));
   so.saft_learning.learning_rate = saft_learning_rate;
   so.saft_learning.target_accuracy = saft_target_accuracy;
+  if (!(saft_anchor >= 0 && saft_anchor < 1e6)) throw InputError("--saft-anchor: expected a value >= 0, got " + std::to_string(saft_anchor));
+  so.saft_learning.anchor_weight = saft_anchor;
   if (so.descriptor == DescriptorChoice::kOrb && (!saft_weights.empty() || saft_mode != "offline" || !saft_weights_out.empty()))
     throw InputError("--saft-weights, --saft-mode and --saft-weights-out need --descriptor saft");
 }
@@ -87,6 +92,7 @@ nlohmann::json TrackingDiagnostics::summary(slam::System& system, const Descript
     j["saft"] = {{"mode", slam::to_string(learning->options().mode)},
                  {"weights", opt.saft_weights.empty() ? SaftNetwork::default_weights_path().string() : opt.saft_weights.string()},
                  {"learning_rate", learning->options().learning_rate},
+                 {"anchor_weight", learning->options().anchor_weight},
                  {"batches_prepared", s.batches_prepared},
                  {"batches_dropped", s.batches_dropped},
                  {"batches_trained", s.batches_trained},

@@ -21,6 +21,7 @@ struct DescriptorOptions {
   std::string saft_mode = "offline";
   double saft_learning_rate = 1e-4;
   double saft_target_accuracy = 0.98;
+  double saft_anchor = 1.0;
   std::filesystem::path saft_weights_out;
   std::filesystem::path inliers_out;
 

@@ -137,34 +137,57 @@ cv::Mat augment_saft_patch(const cv::Mat& row, int op) {
 
 struct SaftOnlineTrainer::Impl {
   Impl(const SaftNetwork& start, const SaftOnlineOptions& o)
-      : options(o), network(SaftNetworkOptions{.batch_size = 1, .threads = o.threads}), rng(o.seed) {
+      : options(o),
+        network(SaftNetworkOptions{.batch_size = 1, .threads = o.threads}),
+        reference(SaftNetworkOptions{.batch_size = 1, .threads = o.threads}),
+        rng(o.seed) {
     network.set_weights(start.weights());
-    auto& net = network.impl_->net;
-    std::vector<torch::Tensor> params = net->parameters();
-    params.push_back(w);
-    params.push_back(b);
-    optimizer = std::make_unique<torch::optim::Adam>(params, torch::optim::AdamOptions(o.learning_rate));
+    reference.set_weights(start.weights());
+    // SGD with momentum 0.9 and weight decay 5e-4 (the source's solver) on the network; the
+    // two decision parameters learn faster, so the decision follows the descriptor rather
+    // than the descriptor being bent to a decision that starts at arbitrary values.
+    std::vector<torch::optim::OptimizerParamGroup> groups;
+    groups.emplace_back(network.impl_->net->parameters(),
+                        std::make_unique<torch::optim::SGDOptions>(
+                            torch::optim::SGDOptions(o.learning_rate).momentum(0.9).weight_decay(o.weight_decay)));
+    groups.emplace_back(std::vector<torch::Tensor>{w, b},
+                        std::make_unique<torch::optim::SGDOptions>(torch::optim::SGDOptions(o.decision_learning_rate).momentum(0.9)));
+    optimizer = std::make_unique<torch::optim::SGD>(std::move(groups), torch::optim::SGDOptions(o.learning_rate));
   }
   SaftOnlineOptions options;
   SaftNetwork network;
+  SaftNetwork reference;  // the starting weights, frozen: the anchor of the descriptor space
   // The hinge decision o = w (b - d^2), as offline; starts where offline training starts.
   torch::Tensor w = torch::full({1}, 2.0, torch::requires_grad());
   torch::Tensor b = torch::full({1}, 1.0, torch::requires_grad());
-  std::unique_ptr<torch::optim::Adam> optimizer;
+  std::unique_ptr<torch::optim::SGD> optimizer;
   std::mt19937_64 rng;
   int steps = 0;
 
   // Hinge loss and accuracy of pairs [index] (first / second already augmented rows).
-  std::pair<torch::Tensor, double> loss_of(const cv::Mat& first, const cv::Mat& second, const std::vector<int>& labels) {
+  // Plus, when anchored, anchor_weight times the mean squared distance of each descriptor to
+  // the reference net's descriptor of the same patch.
+  std::pair<torch::Tensor, double> loss_of(const cv::Mat& first, const cv::Mat& second, const std::vector<int>& labels,
+                                           bool anchored) {
     const int n = first.rows;
     auto& net = network.impl_->net;
+    const auto unit = torch::nn::functional::NormalizeFuncOptions().dim(1);
     const torch::Tensor x = torch::cat({to_tensor(normalize_saft_patches(first)), to_tensor(normalize_saft_patches(second))});
-    const torch::Tensor d = torch::nn::functional::normalize(net->forward(x), torch::nn::functional::NormalizeFuncOptions().dim(1));
+    const torch::Tensor d = torch::nn::functional::normalize(net->forward(x), unit);
     const torch::Tensor d2 = (d.narrow(0, 0, n) - d.narrow(0, n, n)).pow(2).sum(1);
     std::vector<float> y(labels.begin(), labels.end());
     const torch::Tensor yt = torch::from_blob(y.data(), {n}, torch::kFloat32).clone();
     const torch::Tensor o = w * (b - d2);
-    const torch::Tensor loss = torch::relu(1 - yt * o).mean();
+    torch::Tensor loss = torch::relu(1 - yt * o).mean();
+    if (anchored && options.anchor_weight > 0) {
+      torch::Tensor r;
+      {
+        torch::NoGradGuard no_grad;
+        reference.impl_->net->eval();
+        r = torch::nn::functional::normalize(reference.impl_->net->forward(x), unit);
+      }
+      loss = loss + options.anchor_weight * (d - r).pow(2).sum(1).mean();
+    }
     const double acc = (yt * o > 0).to(torch::kFloat32).mean().item<double>();
     return {loss, acc};
   }
@@ -202,7 +225,7 @@ SaftTrainingStep SaftOnlineTrainer::train(const SaftLabelledPairs& pairs) {
       augment_saft_patch(pairs.second.row(i), op).copyTo(second.row(k));
       labels[static_cast<std::size_t>(k)] = pairs.label[static_cast<std::size_t>(i)];
     }
-    auto [loss, acc] = impl_->loss_of(first, second, labels);
+    auto [loss, acc] = impl_->loss_of(first, second, labels, /*anchored=*/true);
     impl_->optimizer->zero_grad();
     loss.backward();
     impl_->optimizer->step();
@@ -222,7 +245,7 @@ double SaftOnlineTrainer::accuracy(const SaftLabelledPairs& pairs) {
   torch::set_num_threads(impl_->options.threads);
   c10::InferenceMode guard;
   impl_->network.impl_->net->eval();
-  return impl_->loss_of(pairs.first, pairs.second, pairs.label).second;
+  return impl_->loss_of(pairs.first, pairs.second, pairs.label, /*anchored=*/false).second;
 }
 
 std::vector<float> SaftOnlineTrainer::weights() const { return impl_->network.weights(); }

@@ -61,14 +61,23 @@ struct SaftLabelledPairs {
 };
 
 struct SaftOnlineOptions {
-  double learning_rate = 1e-4;  // fixed, the source's online rate
+  double learning_rate = 1e-4;  // fixed, the source's online rate (SGD, momentum 0.9)
+  double weight_decay = 5e-4;   // the source's L2 regularization
+  double decision_learning_rate = 1e-2;  // the hinge decision's w and b
+  // Weight of the anchor term: mean squared L2 distance between each descriptor and the one
+  // the starting net gives the same patch. The hinge loss alone does not change when the
+  // whole descriptor space turns, and without the anchor the descriptors wandered (after a
+  // 300-frame run the same patch's descriptor had moved 0.60 in L2, median; 90 % of patches
+  // changed their bag-of-words word), which breaks map points described earlier and place
+  // recognition. 0 turns it off. docs/saft.md has the measurements.
+  double anchor_weight = 1.0;
   int batch_pairs = 128;        // pairs per optimizer step
   std::uint64_t seed = 1;
   int threads = 1;
 };
 
-// Owns a copy of the network being fine-tuned (the prediction net stays the caller's) and
-// its optimizer state across calls. Batch-norm statistics stay frozen at the pre-trained
+// Owns a copy of the network being fine-tuned (the prediction net stays the caller's), a
+// frozen copy of the starting weights (the anchor), and the optimizer state across calls. Batch-norm statistics stay frozen at the pre-trained
 // ones (the network runs in eval mode while it learns): online batches are small and all of
 // one scene, and frozen statistics keep the fine-tuned transform close to the global one.
 class SaftOnlineTrainer {
@@ -79,7 +88,7 @@ class SaftOnlineTrainer {
   SaftOnlineTrainer& operator=(const SaftOnlineTrainer&) = delete;
 
   // One pass over `pairs`: shuffled, each pair flipped (horizontally or vertically) or
-  // rotated (90, 180, 270 degrees) at random, one hinge-loss step per batch_pairs pairs.
+  // rotated (90, 180, 270 degrees) at random, one hinge-loss SGD step per batch_pairs pairs.
   // Returns the pass's mean loss and the accuracy measured before each step's update.
   SaftTrainingStep train(const SaftLabelledPairs& pairs);
   // Accuracy of the current weights on `pairs` (no augmentation, no update).

@@ -40,7 +40,8 @@ SaftLearning::SaftLearning(SaftExtractor& extractor, SaftLearningOptions options
                      "a positive learning rate are required");
   if (options_.mode == SaftLearningMode::kOffline) return;
   trainer_ = std::make_unique<SaftOnlineTrainer>(
-      extractor_.network(), SaftOnlineOptions{.learning_rate = options_.learning_rate, .batch_pairs = 128, .seed = options_.seed});
+      extractor_.network(), SaftOnlineOptions{.learning_rate = options_.learning_rate, .anchor_weight = options_.anchor_weight, .batch_pairs = 128,
+                                            .seed = options_.seed});
   thread_ = std::thread([this] { run(); });
 }
 

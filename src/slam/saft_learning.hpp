@@ -20,11 +20,12 @@
 // The thread runs at a lower scheduling priority (nice +10), so it uses what tracking and
 // local mapping leave of the CPU.
 //
-// Map-point descriptors are not re-computed when the net changes: as in the source, the
-// fine-tuned transform stays close to the pre-trained one, and each point's representative
-// descriptor is re-chosen among its observations as keyframes arrive. The bag of words keeps
-// the vocabulary trained with the pre-trained net. docs/saft.md measures how far descriptors
-// move over a run (descriptor_drift()).
+// Map-point descriptors are not re-computed when the net changes, and the bag of words keeps
+// the vocabulary trained with the pre-trained net. That stays valid because the fine-tuning
+// is anchored: its loss includes the distance of every descriptor to the one the pre-trained
+// net gives the same patch (SaftOnlineOptions::anchor_weight), so the net adapts to the scene
+// without turning its descriptor space away. `builtscene saft drift` measures how far the
+// descriptors of a run's final weights are from the pre-trained ones (docs/saft.md).
 #include <atomic>
 #include <condition_variable>
 #include <cstdint>
@@ -57,6 +58,7 @@ std::string to_string(SaftLearningMode mode);
 struct SaftLearningOptions {
   SaftLearningMode mode = SaftLearningMode::kOffline;
   double learning_rate = 1e-4;
+  double anchor_weight = 1.0;     // see SaftOnlineOptions::anchor_weight
   int positive_pairs = 128;       // per prepared batch (and as many negatives)
   int min_positive_pairs = 16;    // fewer: no batch from this frame
   double target_accuracy = 0.98;  // discrete mode
