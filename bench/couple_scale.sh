@@ -95,13 +95,15 @@ for n in buildings:
                 # Ctrl-C: the launcher stops its models and nats-server (a kill would orphan them).
                 p.send_signal(signal.SIGINT)
                 try:
-                    p.communicate(timeout=30)
+                    _, stderr = p.communicate(timeout=30)
                 except subprocess.TimeoutExpired:
                     p.kill()
-                    p.communicate()
+                    _, stderr = p.communicate()
+                open(f"{d}/{platform}.stderr", "w").write(stderr or "")
                 print(f"N={n} {platform}: not finished in {limit} s (stopped)", file=sys.stderr)
                 continue
             p.stdout, p.stderr = stdout, stderr
+            open(f"{d}/{platform}.stderr", "w").write(stderr)  # the launcher's log (stall reports)
             if p.returncode != 0:
                 print(f"N={n} {platform}: failed: {p.stderr.strip().splitlines()[-1:]}", file=sys.stderr)
                 continue

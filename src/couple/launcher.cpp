@@ -319,6 +319,8 @@ LaunchResult launch_processes(const ScenarioConfig& sc, const LaunchOptions& opt
   const auto start = Clock::now();
   auto spawn = [&](const std::vector<std::string>& models, bool resume) {
     std::vector<std::string> args = {exe.string(), "couple", "run-model", scenario, "--transport", sc.transport};
+    // `builtscene -v couple launch`: the model processes log their debug messages too.
+    if (spdlog::should_log(spdlog::level::debug)) args.insert(args.begin() + 1, "-v");
     for (const auto& m : models) args.insert(args.end(), {"--model", m});
     if (!opt.record.empty()) args.push_back("--recorder");
     if (resume) args.push_back("--resume");
