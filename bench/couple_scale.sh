@@ -123,7 +123,7 @@ print("| buildings | models | model processes | platform | steps/s | nats-server
 print("| --- | --- | --- | --- | --- | --- | --- | --- |")
 for r in rows:
     f = lambda v, fmt: "-" if v is None else format(v, fmt)
-    print(f"| {r['buildings']} | {r['models']} | {r['processes']} | {r['platform']} | {f(r['steps_per_second'], '.0f')} | "
+    print(f"| {r['buildings']} | {r['models']} | {r['processes']} | {r['platform']} | {f(r['steps_per_second'], '.0f' if (r['steps_per_second'] or 0) >= 100 else '.3g')} | "
           f"{f(r['mediator_cpu_seconds'], '.2f')} | {f(r['all_processes_cpu_seconds'], '.1f')} | {r['load_average']:.1f} |")
 PY
 INNER
