@@ -17,6 +17,9 @@
 # scenarios' models_per_process), a wrapper thread each: N + 1 processes instead of 3N + 1.
 # PLATFORMS="lcm mediator hybrid" chooses the platforms.
 # (RUN_TIMEOUT=600: a launch still running after that many seconds is stopped and left out.)
+# Each launch's stderr (stall reports, where the models were when stopped) is kept in
+# bench-out/couple_scale/N<buildings>/<platform>.stderr. 100 buildings, as in docs/coupling.md:
+#   MODELS_PER_PROCESS=3 PLATFORMS=hybrid BUILDINGS=100 STEPS=200 RUNS=1 RUN_TIMEOUT=600 bash bench/couple_scale.sh
 set -euo pipefail
 cd "$(dirname "$0")/.."
 BUILDINGS=${BUILDINGS:-"2 5 10"}
