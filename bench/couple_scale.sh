@@ -17,6 +17,9 @@
 # scenarios' models_per_process), a wrapper thread each: N + 1 processes instead of 3N + 1.
 # PLATFORMS="lcm mediator hybrid" chooses the platforms.
 # (RUN_TIMEOUT=600: a launch still running after that many seconds is stopped and left out.)
+# Each launch's stderr (stall reports, where the models were when stopped) is kept in
+# bench-out/couple_scale/N<buildings>/<platform>.stderr. 100 buildings, as in docs/coupling.md:
+#   MODELS_PER_PROCESS=3 PLATFORMS=hybrid BUILDINGS=100 STEPS=200 RUNS=1 RUN_TIMEOUT=600 bash bench/couple_scale.sh
 set -euo pipefail
 cd "$(dirname "$0")/.."
 BUILDINGS=${BUILDINGS:-"2 5 10"}
@@ -95,13 +98,15 @@ for n in buildings:
                 # Ctrl-C: the launcher stops its models and nats-server (a kill would orphan them).
                 p.send_signal(signal.SIGINT)
                 try:
-                    p.communicate(timeout=30)
+                    _, stderr = p.communicate(timeout=30)
                 except subprocess.TimeoutExpired:
                     p.kill()
-                    p.communicate()
+                    _, stderr = p.communicate()
+                open(f"{d}/{platform}.stderr", "w").write(stderr or "")
                 print(f"N={n} {platform}: not finished in {limit} s (stopped)", file=sys.stderr)
                 continue
             p.stdout, p.stderr = stdout, stderr
+            open(f"{d}/{platform}.stderr", "w").write(stderr)  # the launcher's log (stall reports)
             if p.returncode != 0:
                 print(f"N={n} {platform}: failed: {p.stderr.strip().splitlines()[-1:]}", file=sys.stderr)
                 continue
@@ -121,7 +126,7 @@ print("| buildings | models | model processes | platform | steps/s | nats-server
 print("| --- | --- | --- | --- | --- | --- | --- | --- |")
 for r in rows:
     f = lambda v, fmt: "-" if v is None else format(v, fmt)
-    print(f"| {r['buildings']} | {r['models']} | {r['processes']} | {r['platform']} | {f(r['steps_per_second'], '.0f')} | "
+    print(f"| {r['buildings']} | {r['models']} | {r['processes']} | {r['platform']} | {f(r['steps_per_second'], '.0f' if (r['steps_per_second'] or 0) >= 100 else '.3g')} | "
           f"{f(r['mediator_cpu_seconds'], '.2f')} | {f(r['all_processes_cpu_seconds'], '.1f')} | {r['load_average']:.1f} |")
 PY
 INNER

@@ -36,7 +36,14 @@ class Monitor {
  public:
   Monitor(const ScenarioConfig& sc, Transport& tr, const std::filesystem::path& record) : sc_(sc) {
     if (!record.empty()) log_ = std::make_unique<LcmLogWriter>(record);
-    tr.subscribe("", [this](const std::string& ch, const uint8_t* d, std::size_t n) { on_message(ch, d, n); });
+    auto handler = [this](const std::string& ch, const uint8_t* d, std::size_t n) { on_message(ch, d, n); };
+    if (log_ || !is_nats_url(tr.url())) {
+      tr.subscribe("", handler);  // the recorder takes everything (on LCM one pattern is cheapest)
+    } else {
+      // Through the mediator only the statuses: at 100 buildings the data channels would
+      // double what nats-server sends, for a launcher that drops them.
+      for (const auto& m : sc.models) tr.subscribe(status_channel(m.name), handler);
+    }
     for (const auto& m : sc.models) {
       statuses_[m.name].model = m.name;
       statuses_[m.name].steps = m.steps();
@@ -128,6 +135,23 @@ class Monitor {
   double idle_seconds() const { return std::chrono::duration<double>(Clock::now() - last_progress_).count(); }
   // Start-up (loading plugins, starting interpreters) gets more time than a step.
   bool stalled(double timeout) const { return idle_seconds() > (all_started_ ? timeout : 3 * timeout + 10); }
+
+  // Where the models are: "steps done: 301 models, 12 done, the others at steps 3-197".
+  std::string progress() const {
+    int64_t lo = std::numeric_limits<int64_t>::max(), hi = std::numeric_limits<int64_t>::min();
+    int done = 0;
+    for (const auto& [_, s] : statuses_) {
+      if (s.state == ModelState::kDone) {
+        ++done;
+        continue;
+      }
+      lo = std::min(lo, s.step);
+      hi = std::max(hi, s.step);
+    }
+    std::string r = std::to_string(statuses_.size()) + " models, " + std::to_string(done) + " done";
+    if (done < static_cast<int>(statuses_.size())) r += ", the others at steps " + std::to_string(lo) + "-" + std::to_string(hi);
+    return r;
+  }
 
   std::string stall_report() const {
     std::string r;
@@ -319,6 +343,8 @@ LaunchResult launch_processes(const ScenarioConfig& sc, const LaunchOptions& opt
   const auto start = Clock::now();
   auto spawn = [&](const std::vector<std::string>& models, bool resume) {
     std::vector<std::string> args = {exe.string(), "couple", "run-model", scenario, "--transport", sc.transport};
+    // `builtscene -v couple launch`: the model processes log their debug messages too.
+    if (spdlog::should_log(spdlog::level::debug)) args.insert(args.begin() + 1, "-v");
     for (const auto& m : models) args.insert(args.end(), {"--model", m});
     if (!opt.record.empty()) args.push_back("--recorder");
     if (resume) args.push_back("--resume");
@@ -442,7 +468,7 @@ LaunchResult launch_processes(const ScenarioConfig& sc, const LaunchOptions& opt
       break;
     }
     if (stop_flag()) {
-      failure = "interrupted";
+      failure = "interrupted (" + mon.progress() + ")";
       break;
     }
     if (mon.stalled(sc.timeout_seconds)) {

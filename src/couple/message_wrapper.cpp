@@ -3,6 +3,7 @@
 #include <signal.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <limits>
 #include <map>
@@ -19,6 +20,16 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 using nlohmann::json;
+using Waits = std::vector<std::pair<std::string, int64_t>>;  // channel (or a reason in parentheses), step
+
+// A blocked model repeats an unchanged status at growing intervals, up to this one: a
+// hundred blocked or finished models each reporting every 20 ms flooded the mediator and
+// the consumers that must decode every status (issue 11's 100-building stall).
+constexpr int kFirstRepeatMs = 20;
+constexpr int kMaxRepeatMs = 320;
+// A producer re-sends the same step to the same consumer at growing intervals, up to this
+// one: the copies it sent may still be queued at a busy consumer.
+constexpr int kMaxResendGapMs = 640;
 
 json merged(const LcmCodec& codec, const json& values, int64_t step) {
   json v = codec.zero();
@@ -50,6 +61,11 @@ struct MessageWrapper::Impl {
     // event from a step without one, and the periodic status would make it wait).
     int64_t awaits = std::numeric_limits<int64_t>::max();
     bool heard = false;  // it has reported at least once (it runs)
+    Clock::time_point last_heard{};
+    // Re-sending: the step last re-sent to it, when, and the gap before the same again.
+    int64_t resent_step = std::numeric_limits<int64_t>::min();
+    Clock::time_point resent_at{};
+    int resend_gap_ms = 0;
   };
   struct Output {
     const Publication* pub;
@@ -57,7 +73,6 @@ struct MessageWrapper::Impl {
     std::map<int64_t, Bytes> retained;
     std::vector<Consumer> consumers;  // other models reading this channel
     int64_t last = std::numeric_limits<int64_t>::min();
-    Clock::time_point last_republish{};
     int64_t published_before = std::numeric_limits<int64_t>::min();  // resume: steps up to here are out already
     int64_t events = 0;  // event-driven: events published so far (stamped before n)
   };
@@ -78,7 +93,9 @@ struct MessageWrapper::Impl {
   Clock::time_point last_status{};
   std::string self_channel_note;
   TimeManager time;
-  std::pair<std::string, int64_t> reported_wait;  // in our last status
+  Waits reported_wait;  // in our last status
+  std::string reported_signature;  // state, step and waits of our last status
+  int repeat_ms = kFirstRepeatMs;  // while blocked: repeat an unchanged status after this long
   bool status_wanted = false;  // a consumer of an event channel waits: tell it our counts
 
   Impl(const ScenarioConfig& s, const std::string& model, Transport& t, std::unique_ptr<ModelFunction> f,
@@ -88,7 +105,7 @@ struct MessageWrapper::Impl {
     status.model = cfg.name;
     status.steps = total;
     for (const auto& p : cfg.publish) {
-      Output out{&p, LcmCodec(sc.types, p.type), {}, {}, {}, {}, std::numeric_limits<int64_t>::min(), 0};
+      Output out{&p, LcmCodec(sc.types, p.type), {}, {}, std::numeric_limits<int64_t>::min(), std::numeric_limits<int64_t>::min(), 0};
       for (const auto& m : sc.models) {
         if (m.name == cfg.name) continue;
         for (const auto& sub : m.subscribe)
@@ -169,6 +186,7 @@ struct MessageWrapper::Impl {
       for (auto& c : out.consumers) {
         if (c.model != s.model) continue;
         c.heard = true;
+        c.last_heard = Clock::now();
         if (s.state == ModelState::kDone) c.done = true;
         for (const auto& [ch, step] : s.needs)
           if (ch == out.pub->channel) c.need = std::max(c.need, step);
@@ -184,21 +202,28 @@ struct MessageWrapper::Impl {
             } else if (Clock::now() - last_status >= std::chrono::milliseconds(opt.republish_ms)) {
               // It covered it, a while ago, and the consumer still waits: an event or our
               // status was lost (a request that crossed our status on the way is ignored).
-              republish(out, step);
+              republish(out, c, step);
               status_wanted = true;
             }
           } else if (step <= out.last) {
-            republish(out, step);
+            republish(out, c, step);
           }
         }
       }
     }
   }
 
-  void republish(Output& out, int64_t from) {
+  // Re-sends our retained steps from `from` on, for a consumer that reports waiting for it.
+  // A new step goes at once; the same step again only after a gap that doubles each time
+  // (republish_ms, 2x, 4x ... kMaxResendGapMs): a consumer that is slow to work through
+  // its queue keeps asking for a step whose copies are already on their way, and re-sending
+  // them at every report (every 20 ms) only lengthened its queue.
+  void republish(Output& out, Consumer& c, int64_t from) {
     const auto now = Clock::now();
-    if (now - out.last_republish < std::chrono::milliseconds(opt.republish_ms)) return;
-    out.last_republish = now;
+    if (from == c.resent_step && now - c.resent_at < std::chrono::milliseconds(c.resend_gap_ms)) return;
+    c.resend_gap_ms = from == c.resent_step ? std::min(2 * std::max(c.resend_gap_ms, 1), kMaxResendGapMs) : opt.republish_ms;
+    c.resent_step = from;
+    c.resent_at = now;
     spdlog::debug("{}: re-sending {} from step {}", cfg.name, out.pub->channel, from);
     int count = 0;
     for (auto it = out.retained.lower_bound(from); it != out.retained.end() && count < opt.window; ++it, ++count)
@@ -219,13 +244,13 @@ struct MessageWrapper::Impl {
 
   // Sample-and-hold: the newest event stamped at or before the step needed, else the
   // subscription's initial values; only once every event up to that step is known.
-  bool gather_events(std::size_t i, std::pair<std::string, int64_t>* missing) {
+  bool gather_events(std::size_t i, Waits* missing) {
     auto& in = inputs[i];
     const int64_t want = in.sub->expected_step(n);
     const int64_t complete = time.events_complete(in.sub->channel);
     const bool before_events = want < -1 || (want == -1 && !in.producer_initial);  // initial values only
     if (!before_events && want >= complete) {
-      if (missing) *missing = {in.sub->channel, complete};
+      if (missing) missing->emplace_back(in.sub->channel, complete);
       return false;
     }
     auto it = in.buffer.upper_bound(want);
@@ -234,19 +259,23 @@ struct MessageWrapper::Impl {
     } else if (in.initial) {
       args[i].push_back(&*in.initial);
     } else {
-      if (missing) *missing = {in.sub->channel, want};  // validation prevents this
+      if (missing) missing->emplace_back(in.sub->channel, want);  // validation prevents this
       return false;
     }
     return true;
   }
 
-  // Collects the inputs of step n; on a missing one names it.
-  bool gather(std::pair<std::string, int64_t>* missing) {
+  // Collects the inputs of step n; names every input that is missing (its first missing
+  // step), so that all their producers re-send at once: a consumer that joined late (the
+  // district aggregator of 100 buildings) otherwise recovered one input per round trip.
+  bool gather(Waits* missing) {
+    if (missing) missing->clear();
+    bool complete = true;
     for (std::size_t i = 0; i < inputs.size(); ++i) {
       auto& in = inputs[i];
       args[i].clear();
       if (in.events) {
-        if (!gather_events(i, missing)) return false;
+        if (!gather_events(i, missing)) complete = false;
         continue;
       }
       const int64_t newest = in.sub->expected_step(n);
@@ -258,28 +287,29 @@ struct MessageWrapper::Impl {
         } else if (s < 0 && in.initial && !(s == -1 && in.producer_initial)) {
           args[i].push_back(&*in.initial);
         } else {
-          if (missing) *missing = {in.sub->channel, s};
-          return false;
+          if (missing) missing->emplace_back(in.sub->channel, s);
+          complete = false;
+          break;
         }
       }
     }
-    return true;
+    return complete;
   }
 
   // The inputs are there; the time grant must cover them too (it also covers messages
   // that are on their way but not yet here).
-  bool granted(std::pair<std::string, int64_t>* blocked) {
+  bool granted(Waits* blocked) {
     std::string holder;
     if (time.may_advance(n, &holder)) return true;
-    if (blocked) *blocked = {"(time grant from " + holder + ")", n};
+    if (blocked) *blocked = {{"(time grant from " + holder + ")", n}};
     return false;
   }
 
-  bool flow_ok(std::pair<std::string, int64_t>* blocked) {
+  bool flow_ok(Waits* blocked) {
     for (auto& out : outputs)
       for (auto& c : out.consumers)
         if (!c.done && n - c.need >= opt.window) {
-          if (blocked) *blocked = {"(flow control: " + c.model + " needs " + out.pub->channel + ")", c.need};
+          if (blocked) *blocked = {{"(flow control: " + c.model + " needs " + out.pub->channel + ")", c.need}};
           return false;
         }
     return true;
@@ -319,13 +349,16 @@ struct MessageWrapper::Impl {
     }
   }
 
-  void send_status(ModelState state, const std::pair<std::string, int64_t>* waiting, const std::string& error = "") {
+  void send_status(ModelState state, const Waits* waiting, const std::string& error = "") {
     status.step = n;
     status.utime = now_us();
     status.state = state;
-    status.waiting.clear();
-    if (waiting) status.waiting.push_back(*waiting);
-    reported_wait = waiting ? *waiting : std::pair<std::string, int64_t>{};
+    status.waiting = waiting ? *waiting : Waits{};
+    reported_wait = status.waiting;
+    std::string signature = std::to_string(static_cast<int>(state)) + " " + std::to_string(n);
+    for (const auto& [ch, step] : status.waiting) signature += " " + ch + " " + std::to_string(step);
+    repeat_ms = signature == reported_signature ? std::min(2 * repeat_ms, kMaxRepeatMs) : kFirstRepeatMs;
+    reported_signature = std::move(signature);
     status.needs.clear();
     for (const auto& in : inputs)
       status.needs.emplace_back(in.sub->channel, n >= total ? std::numeric_limits<int64_t>::max() : oldest_needed(in, n));
@@ -349,11 +382,20 @@ struct MessageWrapper::Impl {
     return true;
   }
 
-  bool consumers_heard() const {
+  // After our last step: a consumer not yet served that may still come for our steps, i.e.
+  // one that has not reported yet (it may still be starting: hundreds of processes start
+  // slowly; the launcher fails a run whose model never reports) or one that reported
+  // within the linger time (alive, maybe slow: a consumer recovering a hundred inputs
+  // under load took longer than a fixed linger, and the producers left before it was
+  // served). Empty when every unserved consumer has been silent for the linger time.
+  std::string unserved_consumer_alive(Clock::time_point now) const {
     for (const auto& out : outputs)
-      for (const auto& c : out.consumers)
-        if (!c.heard && !c.done) return false;
-    return true;
+      for (const auto& c : out.consumers) {
+        const int64_t last = out.pub->events ? total - 1 : out.last;
+        if (c.done || c.need > last) continue;
+        if (!c.heard || now - c.last_heard <= std::chrono::duration<double>(opt.linger_seconds)) return c.model;
+      }
+    return "";
   }
 
   bool stop_requested() const { return opt.stop && opt.stop->load(); }
@@ -416,8 +458,8 @@ struct MessageWrapper::Impl {
     for (auto& out : outputs)
       if (out.pub->initial) publish_output(out, -1, out.codec.encode(merged(out.codec, *out.pub->initial, -1)));
     send_status(ModelState::kRunning, nullptr);
-    std::pair<std::string, int64_t> wait;
-    Clock::time_point finished{};
+    Waits wait;
+    bool finished = false;
     while (!stop_requested()) {
       tr.handle(0);
       answer_status_request();
@@ -427,27 +469,28 @@ struct MessageWrapper::Impl {
           continue;
         }
       } else {
-        if (finished == Clock::time_point{}) {
-          finished = Clock::now();
+        if (!finished) {
+          finished = true;
           send_status(ModelState::kDone, nullptr);
         }
         if (consumers_done()) return;
-        // A consumer that has not started yet (hundreds of processes start slowly) still
-        // needs everything: the linger time counts only once every consumer has reported
-        // (the launcher fails a run whose model never reports).
-        if (!consumers_heard()) finished = Clock::now();
-        if (Clock::now() - finished > std::chrono::duration<double>(opt.linger_seconds)) {
-          spdlog::warn("{}: finished, but not every consumer confirmed it got the last steps", cfg.name);
+        // Serve consumers for as long as they may still come (see unserved_consumer_alive).
+        if (unserved_consumer_alive(Clock::now()).empty()) {
+          spdlog::warn("{}: finished, but a consumer stopped reporting for {} s before it confirmed the last steps",
+                       cfg.name, opt.linger_seconds);
           return;
         }
       }
       // A new wait for an event channel's completeness is reported at once (see Consumer::awaits).
-      if (n < total && wait != reported_wait && is_event_input(wait.first)) send_status(ModelState::kWaiting, &wait);
+      if (n < total && wait != reported_wait &&
+          std::any_of(wait.begin(), wait.end(), [&](const auto& w) { return is_event_input(w.first); }))
+        send_status(ModelState::kWaiting, &wait);
       tr.handle(20);
       answer_status_request();
-      // Report at most every 20 ms while blocked: consumers learn what to re-send, the
-      // launcher what everyone waits for.
-      if (Clock::now() - last_status > std::chrono::milliseconds(20)) {
+      // Report while blocked, after 20 ms and then at growing intervals while nothing
+      // changes (up to kMaxRepeatMs): consumers learn what to re-send, the launcher what
+      // everyone waits for.
+      if (Clock::now() - last_status > std::chrono::milliseconds(repeat_ms)) {
         if (n < total)
           send_status(ModelState::kWaiting, &wait);
         else

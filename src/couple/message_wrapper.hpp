@@ -23,7 +23,9 @@ struct WrapperOptions {
   int window = 256;       // producer steps a producer may run ahead of a consumer's need
   int status_every = 32;  // steps between status reports while running
   int republish_ms = 10;  // minimum interval between re-publishing to a waiting consumer
-  double linger_seconds = 10;  // after the last step, serve consumers at most this long
+  // After the last step, serve each consumer until it confirms, or until it has been
+  // silent this long (it died); one that keeps reporting is served however long it takes.
+  double linger_seconds = 10;
   const std::atomic<bool>* stop = nullptr;
   // The launcher records the run: treat its recorder (status name kRecorderName) as a
   // consumer of every output, so lost messages are re-sent to it too.

@@ -8,9 +8,11 @@
 #include <condition_variable>
 #include <deque>
 #include <mutex>
+#include <thread>
 #include <vector>
 
 #include "core/errors.hpp"
+#include "core/logging.hpp"
 
 namespace builtscene::couple {
 namespace {
@@ -32,6 +34,8 @@ void check_channel(const std::string& url, const std::string& channel) {
 
 std::string stream_name(const std::string& prefix) { return "BS_" + prefix; }
 
+constexpr int kConnectAttempts = 6;
+
 class NatsTransport final : public Transport {
  public:
   NatsTransport(std::string url, std::string address, std::string prefix)
@@ -44,14 +48,26 @@ class NatsTransport final : public Transport {
     // Each publish goes out at once: a coupled step waits for its inputs, so batching
     // only adds latency.
     if (s == NATS_OK) s = natsOptions_SetSendAsap(opts, true);
-    if (s == NATS_OK) s = natsOptions_SetTimeout(opts, 5000);
+    if (s == NATS_OK) s = natsOptions_SetTimeout(opts, 10000);
     if (s == NATS_OK) s = natsOptions_SetMaxReconnect(opts, 20);
     if (s == NATS_OK) s = natsOptions_SetReconnectWait(opts, 250);
     // The library's shared delivery thread instead of one thread per subscription: a
     // wrapper subscribes to a few channels and statuses, a district aggregator to hundreds,
     // and a process may host many wrappers; the callback only queues for handle().
     if (s == NATS_OK) s = natsOptions_UseGlobalMessageDelivery(opts, true);
-    if (s == NATS_OK) s = natsConnection_Connect(&conn_, opts);
+    // A hundred model processes connecting at once to a server on a loaded machine (load
+    // average 150+) timed out or got no PONG in time (issue 11): try again a few times.
+    // A refused connection (no server) fails at once.
+    for (int attempt = 1; s == NATS_OK; ++attempt) {
+      s = natsConnection_Connect(&conn_, opts);
+      if (s == NATS_OK || attempt == kConnectAttempts ||
+          (s != NATS_TIMEOUT && s != NATS_PROTOCOL_ERROR && s != NATS_IO_ERROR && s != NATS_STALE_CONNECTION))
+        break;
+      spdlog::warn("mediator {}: connecting failed ({}), attempt {} of {}; trying again", address, status_text(s), attempt,
+                   kConnectAttempts);
+      std::this_thread::sleep_for(std::chrono::seconds(1));
+      s = NATS_OK;
+    }
     natsOptions_Destroy(opts);
     if (s != NATS_OK) close(wake_);
     if (s != NATS_OK)

@@ -142,6 +142,8 @@ std::string regex_escape(const std::string& s) {
 }
 
 class LcmTransport final : public Transport {
+  static constexpr int kMaxDrain = 512;
+
  public:
   explicit LcmTransport(std::string url) : url_(std::move(url)) {
     lcm_ = lcm_create(url_.c_str());
@@ -176,9 +178,12 @@ class LcmTransport final : public Transport {
     count_ = 0;
     pollfd p{lcm_get_fileno(lcm_), POLLIN, 0};
     int wait = timeout_ms;
-    while (poll(&p, 1, wait) > 0 && (p.revents & POLLIN)) {
+    // Drain what is already there, then return; at most kMaxDrain datagrams, so that a
+    // wrapper on a busy group (every socket of the group receives every datagram) gets back
+    // to its own loop: unbounded, it could stay here as long as traffic flowed.
+    for (int k = 0; k < kMaxDrain && poll(&p, 1, wait) > 0 && (p.revents & POLLIN); ++k) {
       if (lcm_handle(lcm_) != 0) break;
-      wait = 0;  // drain what is already there, then return
+      wait = 0;
     }
     return count_;
   }
