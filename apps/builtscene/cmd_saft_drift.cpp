@@ -33,13 +33,6 @@ struct DriftOptions {
   long every = 10;
 };
 
-double quantile(std::vector<double> v, double q) {
-  if (v.empty()) return 0.0;
-  const auto k = static_cast<std::size_t>(q * static_cast<double>(v.size() - 1));
-  std::nth_element(v.begin(), v.begin() + static_cast<long>(k), v.end());
-  return v[k];
-}
-
 nlohmann::json run_drift(const DriftOptions& o) {
   StageTimer timer;
   if (o.every < 1) throw InputError("--every: expected at least 1");

@@ -3,6 +3,7 @@
 #include <algorithm>
 
 #include "core/errors.hpp"
+#include "core/stage_timer.hpp"
 #include "features/saft_extractor.hpp"
 
 namespace builtscene::app {
@@ -69,14 +70,6 @@ void TrackingDiagnostics::write_csv(const std::filesystem::path& path) const {
   if (!f) throw InputError(located(path, 0, "write failed"));
 }
 
-namespace {
-double median(std::vector<double> v) {
-  if (v.empty()) return 0.0;
-  std::nth_element(v.begin(), v.begin() + static_cast<long>(v.size() / 2), v.end());
-  return v[v.size() / 2];
-}
-}  // namespace
-
 nlohmann::json TrackingDiagnostics::summary(slam::System& system, const DescriptorOptions& opt) const {
   std::vector<double> initial, local;
   for (const auto& r : rows_) {
@@ -84,8 +77,8 @@ nlohmann::json TrackingDiagnostics::summary(slam::System& system, const Descript
     if (r.local_matches > 0) local.push_back(static_cast<double>(r.local_inliers) / r.local_matches);
   }
   nlohmann::json j = {{"descriptor", opt.descriptor},
-                      {"inlier_ratio_initial_median", median(initial)},
-                      {"inlier_ratio_local_map_median", median(local)},
+                      {"inlier_ratio_initial_median", quantile(initial, 0.5)},
+                      {"inlier_ratio_local_map_median", quantile(local, 0.5)},
                       {"inliers_csv", opt.inliers_out.string()}};
   if (const auto* learning = system.saft_learning()) {
     const auto s = learning->stats();
