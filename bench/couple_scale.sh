@@ -91,7 +91,8 @@ for n in buildings:
             before = cpu_children()
             env = dict(os.environ, TMPDIR=d)
             p = subprocess.Popen([bin_, "couple", "launch", f"{d}/scenario-{platform}.yaml", "--json"],
-                                 stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+                                 stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
+                                 start_new_session=True)
             try:
                 stdout, stderr = p.communicate(timeout=limit)
             except subprocess.TimeoutExpired:
@@ -102,6 +103,12 @@ for n in buildings:
                 except subprocess.TimeoutExpired:
                     p.kill()
                     _, stderr = p.communicate()
+                # Whatever is left of the run (model processes die with the launcher; this is
+                # the backstop) goes with its process group, so the next run starts on an idle machine.
+                try:
+                    os.killpg(p.pid, signal.SIGKILL)
+                except ProcessLookupError:
+                    pass
                 open(f"{d}/{platform}.stderr", "w").write(stderr or "")
                 print(f"N={n} {platform}: not finished in {limit} s (stopped)", file=sys.stderr)
                 continue

@@ -1,6 +1,7 @@
 #include "couple/launcher.hpp"
 
 #include <signal.h>
+#include <sys/prctl.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -354,9 +355,14 @@ LaunchResult launch_processes(const ScenarioConfig& sc, const LaunchOptions& opt
     std::vector<char*> argv;
     for (auto& a : args) argv.push_back(a.data());
     argv.push_back(nullptr);
+    const pid_t launcher = getpid();
     const pid_t pid = fork();
     if (pid < 0) throw Failure("fork failed");
     if (pid == 0) {
+      // A model process never outlives its launcher, even one killed by SIGKILL (a stopped
+      // benchmark or a crashed launcher used to leave hundreds of them running).
+      prctl(PR_SET_PDEATHSIG, SIGTERM);
+      if (getppid() != launcher) _exit(1);  // the launcher died before the prctl
       execv(exe.c_str(), argv.data());
       std::fprintf(stderr, "cannot run %s: %s\n", exe.c_str(), std::strerror(errno));
       _exit(127);

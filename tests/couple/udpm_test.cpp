@@ -165,6 +165,26 @@ TEST(Udpm, CtrlCStopsEveryModelCleanlyAndKeepsTheLog) {
   EXPECT_EQ(left_over(d), "");
 }
 
+TEST(Udpm, ALauncherKilledBySigkillTakesEveryModelProcessWithIt) {
+  // SIGKILL gives the launcher no chance to stop its models; the kernel must (each model
+  // process asks for SIGTERM when its parent dies, each external program for SIGKILL).
+  const auto d = python_scenario("sigkill", "pass", 100000);  // far too long to finish
+  const std::string pattern = "'[" + d.string().substr(0, 1) + "]" + d.string().substr(1) + "'";
+  UDPM_OR_SKIP(r, kBin + " couple launch " + (d / "scenario.yaml").string() + " --record " +
+                      (d / "run.lcmlog").string() + " > " + (d / "launch.log").string() + " 2>&1 & P=$!\n"
+                      // (its output goes to a file: orphans holding the test's pipe would hang the test)
+                      "for i in $(seq 300); do [ $(stat -c %s " + (d / "run.lcmlog").string() +
+                      " 2>/dev/null || echo 0) -gt 65536 ] && break; sleep 0.1; done\n"
+                      "echo models=$(pgrep -fc -- " + pattern + ")\n"
+                      "kill -KILL $P\nset +e\nwait $P\n"
+                      // the models get SIGTERM at once; give a loaded machine 20 s to let them exit
+                      "for i in $(seq 200); do pgrep -f -- " + pattern + " >/dev/null || break; sleep 0.1; done\n");
+  // The launcher, its 3 run-model processes and their 3 python programs were running.
+  EXPECT_NE(r->out.find("models=7"), std::string::npos) << r->out;
+  EXPECT_EQ(left_over(d), "");
+  couple_test::run("pkill -KILL -f -- " + pattern);  // a failed run must not leave them behind
+}
+
 TEST(Udpm, SpyShowsTheLiveChannelsAndSteps) {
   const auto dir = couple_test::temp_dir("spy");
   const std::string scenario = couple_test::kExample + "/scenario.yaml";
