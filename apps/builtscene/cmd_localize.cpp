@@ -11,6 +11,7 @@
 #include <memory>
 #include <optional>
 
+#include "cli_parsing.hpp"
 #include "command_registry.hpp"
 #include "descriptor_options.hpp"
 #include "core/errors.hpp"
@@ -42,10 +43,7 @@ nlohmann::json run_localize(const LocalizeOptions& opt) {
   so.vocabulary = opt.vocabulary;
   opt.features.apply(so);
   opt.features.check_outputs();
-  if (!opt.trajectory.empty()) {
-    std::ofstream probe(opt.trajectory, std::ios::app);
-    if (!probe) throw InputError(located(opt.trajectory, 0, "cannot write output file"));
-  }
+  check_output_file(opt.trajectory);
   slam::System system(data.settings(), so);
   const auto load_start = std::chrono::steady_clock::now();
   const auto info = system.load_map(opt.map);

@@ -7,6 +7,7 @@
 #include <fstream>
 #include <memory>
 
+#include "cli_parsing.hpp"
 #include "command_registry.hpp"
 #include "descriptor_options.hpp"
 #include "rgbd_frame_reader.hpp"
@@ -73,11 +74,7 @@ nlohmann::json run_slam(const SlamOptions& opt) {
   const auto start_mode = slam::parse_mode(opt.mode);
   if (!start_mode) throw InputError("--mode: '" + opt.mode + "' must be slam or localize");
   const slam::ModePlan plan = make_mode_plan(opt);
-  for (const auto& out : {opt.trajectory, opt.keyframes, opt.map_out}) {
-    if (out.empty()) continue;
-    std::ofstream probe(out, std::ios::app);
-    if (!probe) throw InputError(located(out, 0, "cannot write output file"));
-  }
+  for (const auto& out : {opt.trajectory, opt.keyframes, opt.map_out}) check_output_file(out);
 
   std::optional<SlamOgmOutput> ogm;
   if (opt.ogm.enabled()) {

@@ -11,6 +11,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "cli_parsing.hpp"
 #include "command_registry.hpp"
 #include "core/errors.hpp"
 #include "core/logging.hpp"
@@ -63,10 +64,7 @@ nlohmann::json run_train(const VocabOptions& opt) {
   if (opt.k < 2 || opt.k > 1000) throw InputError("--k: expected 2..1000, got " + std::to_string(opt.k));
   if (opt.levels < 1 || opt.levels > 8) throw InputError("--levels: expected 1..8, got " + std::to_string(opt.levels));
   if (opt.iterations < 1) throw InputError("--iterations: expected at least 1");
-  {
-    std::ofstream probe(opt.out, std::ios::app);
-    if (!probe) throw InputError(located(opt.out, 0, "cannot write output file"));
-  }
+  check_output_file(opt.out);
   StageTimer timer;
   std::vector<cv::Mat> images;
   std::size_t descriptors = 0, skipped = 0;

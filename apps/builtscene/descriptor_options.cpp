@@ -2,6 +2,7 @@
 
 #include <algorithm>
 
+#include "cli_parsing.hpp"
 #include "core/errors.hpp"
 #include "core/stage_timer.hpp"
 #include "features/saft_extractor.hpp"
@@ -14,7 +15,7 @@ void DescriptorOptions::add_to(CLI::App& cmd) {
   cmd.add_option("--saft-weights", saft_weights, "SAFT weights (default: the shipped data/saft/saft_v1.saft)");
   cmd.add_option("--saft-mode", saft_mode,
                  "SAFT online learning: offline (pre-trained net only), continuous (new weights after every "
-                 "training batch) or discrete (when training accuracy reaches --saft-target-accuracy)")
+                 "training batch) or discrete (after passes over one batch up to --saft-target-accuracy or 20 passes)")
       ->capture_default_str();
   cmd.add_option("--saft-learning-rate", saft_learning_rate, "SAFT online learning rate (fixed)")->capture_default_str();
   cmd.add_option("--saft-target-accuracy", saft_target_accuracy, "Discrete SAFT: training accuracy that releases weights")
@@ -44,11 +45,7 @@ void DescriptorOptions::apply(slam::SystemOptions& so) const {
 }
 
 void DescriptorOptions::check_outputs() const {
-  for (const auto& out : {saft_weights_out, inliers_out}) {
-    if (out.empty()) continue;
-    std::ofstream probe(out, std::ios::app);
-    if (!probe) throw InputError(located(out, 0, "cannot write output file"));
-  }
+  for (const auto& out : {saft_weights_out, inliers_out}) check_output_file(out);
 }
 
 void TrackingDiagnostics::add(long frame, double timestamp, const slam::TrackingOutcome& out, long weight_updates) {
@@ -91,6 +88,7 @@ nlohmann::json TrackingDiagnostics::summary(slam::System& system, const Descript
                  {"batches_trained", s.batches_trained},
                  {"passes", s.passes},
                  {"weight_updates", s.weight_updates},
+                 {"target_reached", s.target_reached},
                  {"frames_per_update", s.weight_updates > 0 ? static_cast<double>(rows_.size()) / s.weight_updates : 0.0},
                  {"first_accuracy", s.first_accuracy},
                  {"last_accuracy", s.last_accuracy}};

@@ -169,25 +169,25 @@ void SaftLearning::run() {
       slot_.reset();
       ++stats_.batches_trained;
     }
-    const int passes = options_.mode == SaftLearningMode::kDiscrete ? options_.max_passes : 1;
-    bool publish = options_.mode == SaftLearningMode::kContinuous;
+    // Continuous: one pass, then publish. Discrete: pass over the batch until the target
+    // accuracy or max_passes, then publish (both modes publish after every consumed batch;
+    // discrete's weights come later and fit an older batch more closely).
+    const int passes = options_.mode == SaftLearningMode::kDiscrete ? std::max(1, options_.max_passes) : 1;
     for (int pass = 0; pass < passes; ++pass) {
       const SaftTrainingStep step = trainer_->train(batch);
       std::lock_guard lock(mutex_);
       ++stats_.passes;
       if (stats_.passes == 1) stats_.first_accuracy = step.accuracy;
       stats_.last_accuracy = step.accuracy;
+      if (stop_) return;
       if (options_.mode == SaftLearningMode::kDiscrete && step.accuracy >= options_.target_accuracy) {
-        publish = true;
+        ++stats_.target_reached;
         break;
       }
-      if (stop_) return;
     }
-    if (publish) {
-      std::vector<float> w = trainer_->weights();
-      std::lock_guard lock(mutex_);
-      published_ = std::move(w);
-    }
+    std::vector<float> w = trainer_->weights();
+    std::lock_guard lock(mutex_);
+    published_ = std::move(w);
   }
 }
 

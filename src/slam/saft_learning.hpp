@@ -11,9 +11,10 @@
 // Learning thread: takes the newest batch, fine-tunes its own copy of the network
 // (SaftOnlineTrainer: flips and rotations, fixed learning rate), and publishes weights:
 //   continuous  after every consumed batch (one pass over it);
-//   discrete    when a pass over the batch reaches `target_accuracy` (it keeps passing over
-//               the same batch until then, at most `max_passes`), the source's "delayed
-//               overfitting";
+//   discrete    after passing over one batch until a pass reaches `target_accuracy` or
+//               `max_passes` passes are done, whichever comes first: the source's "delayed
+//               overfitting" (it waits for accuracy 1.00; with the anchor below a batch rarely
+//               passes 0.9, so a target alone would never release any weights);
 //   offline     no learning thread; the pre-trained net stays.
 // Tracking thread, before extracting the next frame: install_weights() copies published
 // weights into the prediction net (a copy of ~90k floats: tracking never waits for training).
@@ -61,8 +62,8 @@ struct SaftLearningOptions {
   double anchor_weight = 1.0;     // see SaftOnlineOptions::anchor_weight
   int positive_pairs = 128;       // per prepared batch (and as many negatives)
   int min_positive_pairs = 16;    // fewer: no batch from this frame
-  double target_accuracy = 0.98;  // discrete mode
-  int max_passes = 20;            // discrete mode: passes over one batch before giving up on it
+  double target_accuracy = 0.98;  // discrete mode: a pass this accurate releases the weights
+  int max_passes = 20;            // discrete mode: ... and so does the last pass over one batch
   int patch_keyframes = 30;       // newest keyframes whose patches are kept (1 KB per keypoint)
   std::uint64_t seed = 1;
   // Sees every prepared batch in the tracking thread (tests check pairs against ground truth).
@@ -78,6 +79,7 @@ class SaftLearning {
     long batches_trained = 0;   // taken by the learner
     long passes = 0;            // training passes (discrete: several per batch)
     long weight_updates = 0;    // weights installed in the prediction net
+    long target_reached = 0;    // discrete: batches released by target_accuracy (the others by max_passes)
     double last_accuracy = 0;   // of the last pass
     double first_accuracy = 0;  // of the first pass (the pre-trained net on this scene)
   };

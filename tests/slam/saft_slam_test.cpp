@@ -130,5 +130,26 @@ TEST(SaftSlam, TracksAGeneratedRoomOfflineAndWhileLearningWithTruePairs) {
   EXPECT_GE(neg_apart, neg * 95 / 100);
 }
 
+TEST(SaftSlam, DiscreteLearningReleasesWeightsAfterSeveralPassesOverABatch) {
+  // Discrete: several passes over one batch, then the weights go to the prediction net (at the
+  // target accuracy or after max_passes). With a target no anchored run reached, the first
+  // version never released any weights: discrete SAFT was offline SAFT under another name.
+  const GeneratedWorld world("lab-room", synth::MotionKind::Handheld, 5, 80, /*kinect_noise=*/false);
+  const auto data = TumDataset::open(world.dir);
+  const int n = static_cast<int>(data.size());
+  const SaftRun discrete = run(data, SaftLearningMode::kDiscrete);
+  const auto& s = discrete.learning;
+  std::printf("discrete SAFT: tracked %d/%d, ATE %.2f cm, %ld trained, %ld passes, %ld at target, %ld weight updates\n",
+              discrete.tracked, n, 100 * discrete.ate_rmse, s.batches_trained, s.passes, s.target_reached, s.weight_updates);
+  EXPECT_GE(discrete.tracked, n * 95 / 100);
+  EXPECT_LT(discrete.ate_rmse, 0.03);
+  ASSERT_GE(s.batches_trained, 2);
+  EXPECT_GE(s.weight_updates, 1);
+  EXPECT_LE(s.weight_updates, s.batches_trained);  // at most one release per batch
+  EXPECT_LE(s.passes, 20 * s.batches_trained);
+  // A batch released before max_passes was released by the target.
+  EXPECT_GE(s.passes, s.target_reached + 20 * (s.batches_trained - s.target_reached) - 20);
+}
+
 }  // namespace
 }  // namespace builtscene::slam
