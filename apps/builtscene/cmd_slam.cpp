@@ -69,6 +69,7 @@ nlohmann::json run_slam(const SlamOptions& opt) {
   so.relocalization = !opt.no_relocalization;
   so.loop_closing = !opt.no_loop_closing;
   opt.features.apply(so);
+  so.saft_learning.synchronous = opt.sync_mapping;  // reproducible: learning inline too
   opt.features.check_outputs();
   // Fail on an unwritable output before spending minutes on the sequence.
   const auto start_mode = slam::parse_mode(opt.mode);
@@ -235,7 +236,7 @@ const bool registered_slam = register_command({
       cmd.add_option("--keyframes", opt->keyframes, "Output: TUM trajectory of the keyframes");
       cmd.add_option("--max-frames", opt->max_frames, "Only the first N frames (0 = all)");
       cmd.add_flag("--sync-mapping", opt->sync_mapping,
-                   "Run local mapping inline after each keyframe (deterministic, slower) instead of in its thread");
+                   "Run local mapping (and SAFT online learning) inline instead of in their threads (deterministic, slower)");
       cmd.add_option("--map-in", opt->map_in, "Saved map to start from (tracking relocalizes in it, then extends it)");
       cmd.add_option("--map-out", opt->map_out, "Output: the map at the end (binary, see docs/slam.md)");
       cmd.add_option("--mode", opt->mode, "Mode at the start: slam or localize")->capture_default_str();

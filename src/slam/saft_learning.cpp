@@ -42,7 +42,7 @@ SaftLearning::SaftLearning(SaftExtractor& extractor, SaftLearningOptions options
   trainer_ = std::make_unique<SaftOnlineTrainer>(
       extractor_.network(), SaftOnlineOptions{.learning_rate = options_.learning_rate, .anchor_weight = options_.anchor_weight, .batch_pairs = 128,
                                             .seed = options_.seed});
-  thread_ = std::thread([this] { run(); });
+  if (!options_.synchronous) thread_ = std::thread([this] { run(); });
 }
 
 SaftLearning::~SaftLearning() { finish(); }
@@ -130,13 +130,21 @@ void SaftLearning::prepare(const Frame& frame, const cv::Mat& patches) {
   if (options_.mode == SaftLearningMode::kOffline) return;
   SaftLabelledPairs pairs = make_pairs(frame, patches);
   if (options_.on_batch && pairs.size() > 0) options_.on_batch(pairs);
-  std::lock_guard lock(mutex_);
-  ++stats_.frames;
-  if (pairs.size() == 0) return;
-  ++stats_.batches_prepared;
-  if (slot_) ++stats_.batches_dropped;
-  slot_ = std::move(pairs);
-  wake_.notify_one();
+  {
+    std::lock_guard lock(mutex_);
+    ++stats_.frames;
+    if (pairs.size() == 0) return;
+    ++stats_.batches_prepared;
+    if (options_.synchronous) {
+      ++stats_.batches_trained;
+    } else {
+      if (slot_) ++stats_.batches_dropped;
+      slot_ = std::move(pairs);
+      wake_.notify_one();
+      return;
+    }
+  }
+  train(pairs);  // synchronous: in this thread, before the next frame
 }
 
 bool SaftLearning::install_weights() {
@@ -169,26 +177,31 @@ void SaftLearning::run() {
       slot_.reset();
       ++stats_.batches_trained;
     }
-    // Continuous: one pass, then publish. Discrete: pass over the batch until the target
-    // accuracy or max_passes, then publish (both modes publish after every consumed batch;
-    // discrete's weights come later and fit an older batch more closely).
-    const int passes = options_.mode == SaftLearningMode::kDiscrete ? std::max(1, options_.max_passes) : 1;
-    for (int pass = 0; pass < passes; ++pass) {
-      const SaftTrainingStep step = trainer_->train(batch);
-      std::lock_guard lock(mutex_);
-      ++stats_.passes;
-      if (stats_.passes == 1) stats_.first_accuracy = step.accuracy;
-      stats_.last_accuracy = step.accuracy;
-      if (stop_) return;
-      if (options_.mode == SaftLearningMode::kDiscrete && step.accuracy >= options_.target_accuracy) {
-        ++stats_.target_reached;
-        break;
-      }
-    }
-    std::vector<float> w = trainer_->weights();
-    std::lock_guard lock(mutex_);
-    published_ = std::move(w);
+    if (!train(batch)) return;
   }
+}
+
+bool SaftLearning::train(const SaftLabelledPairs& batch) {
+  // Continuous: one pass, then publish. Discrete: pass over the batch until the target
+  // accuracy or max_passes, then publish (both modes publish after every consumed batch;
+  // discrete's weights come later and fit an older batch more closely).
+  const int passes = options_.mode == SaftLearningMode::kDiscrete ? std::max(1, options_.max_passes) : 1;
+  for (int pass = 0; pass < passes; ++pass) {
+    const SaftTrainingStep step = trainer_->train(batch);
+    std::lock_guard lock(mutex_);
+    ++stats_.passes;
+    if (stats_.passes == 1) stats_.first_accuracy = step.accuracy;
+    stats_.last_accuracy = step.accuracy;
+    if (stop_) return false;
+    if (options_.mode == SaftLearningMode::kDiscrete && step.accuracy >= options_.target_accuracy) {
+      ++stats_.target_reached;
+      break;
+    }
+  }
+  std::vector<float> w = trainer_->weights();
+  std::lock_guard lock(mutex_);
+  published_ = std::move(w);
+  return true;
 }
 
 }  // namespace builtscene::slam

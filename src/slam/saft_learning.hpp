@@ -65,6 +65,10 @@ struct SaftLearningOptions {
   double target_accuracy = 0.98;  // discrete mode: a pass this accurate releases the weights
   int max_passes = 20;            // discrete mode: ... and so does the last pass over one batch
   int patch_keyframes = 30;       // newest keyframes whose patches are kept (1 KB per keypoint)
+  // No learning thread: prepare() trains on each batch itself, so the weights a frame is
+  // described with depend on the frames alone (reproducible runs: `--sync-mapping`; tests).
+  // Much slower, and no batch is ever dropped.
+  bool synchronous = false;
   std::uint64_t seed = 1;
   // Sees every prepared batch in the tracking thread (tests check pairs against ground truth).
   std::function<void(const SaftLabelledPairs&)> on_batch;
@@ -94,7 +98,8 @@ class SaftLearning {
 
   // Tracking thread. The patches of the frame just extracted (SaftExtractor::last_patches).
   void add_keyframe(long frame_id, const cv::Mat& patches);
-  // Tracking thread, map lock held, `frame` tracked: prepares and queues a batch.
+  // Tracking thread, map lock held, `frame` tracked: prepares and queues a batch (synchronous:
+  // trains on it).
   void prepare(const Frame& frame, const cv::Mat& patches);
   // Tracking thread, before extraction: installs weights published since the last call.
   bool install_weights();
@@ -118,9 +123,11 @@ class SaftLearning {
   std::optional<std::vector<float>> published_;
   bool stop_ = false;
   Stats stats_;
-  std::unique_ptr<SaftOnlineTrainer> trainer_;  // learning thread only (after construction)
+  std::unique_ptr<SaftOnlineTrainer> trainer_;  // learning thread only, or prepare() when synchronous
   std::thread thread_;
   void run();
+  // One batch: its passes, then the weights go to the hand-over slot. False when stopped.
+  bool train(const SaftLabelledPairs& batch);
 };
 
 }  // namespace builtscene::slam
