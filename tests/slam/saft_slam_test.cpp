@@ -170,9 +170,9 @@ TEST(SaftSlam, DiscreteLearningReleasesWeightsAfterSeveralPassesOverABatch) {
   EXPECT_EQ(again.learning.passes, s.passes);
 }
 
-// A map built while the net learned holds descriptors of many nets. Thanks to the anchor
-// they stay in the pre-trained net's space, so another run with the pre-trained net
-// relocalizes in that map (bag of words with the shipped SAFT vocabulary, then descriptor
+// A map built while the net learned holds descriptors of many nets. They must stay in the
+// pre-trained net's space (the anchor's job; at this length the test also passes without it,
+// docs/saft.md), so that another run with the pre-trained net relocalizes in that map (bag of words with the shipped SAFT vocabulary, then descriptor
 // matching) and localizes there: the issue 5 localization acceptance, with SAFT and a map
 // made by online learning. Robot sequences of the room with Kinect noise: A (seed 1) builds
 // the map, C (seed 3) drives the same loop from the same start (as in saved_map_test).
