@@ -473,7 +473,18 @@ struct MessageWrapper::Impl {
           finished = true;
           send_status(ModelState::kDone, nullptr);
         }
-        if (consumers_done()) return;
+        if (consumers_done()) {
+          // Our producers stop serving us when they hear we are done, and this is the last
+          // status we send: it goes out three times. One lost copy on a lossy network left a
+          // producer serving us until the launcher, seeing every model done but a thread
+          // still running, declared a stall (DistributedRun.LosingMessagesIsRecoveredByRepublishing,
+          // about 1 run in 50).
+          for (int copy = 0; copy < 2; ++copy) {
+            tr.handle(5);
+            send_status(ModelState::kDone, nullptr);
+          }
+          return;
+        }
         // Serve consumers for as long as they may still come (see unserved_consumer_alive).
         if (unserved_consumer_alive(Clock::now()).empty()) {
           spdlog::warn("{}: finished, but a consumer stopped reporting for {} s before it confirmed the last steps",
