@@ -45,9 +45,7 @@ nlohmann::json run_ate(const TrajectoryPairOptions& o) {
   if (!o.aligned_out.empty()) {
     // Every estimated pose (not only the paired ones) in the ground truth's frame, so maps
     // built from the estimate overlay the ground truth's maps.
-    Trajectory aligned;
-    for (const auto& p : est) aligned.push_back({p.timestamp, r.est_to_gt.transform_pose(p.pose)});
-    write_tum_trajectory(o.aligned_out, aligned);
+    write_tum_trajectory(o.aligned_out, transformed(est, r.est_to_gt));
     j["aligned_out"] = o.aligned_out;
   }
   return j;

@@ -96,8 +96,7 @@ DemoSection run_slam_demo(const std::filesystem::path& dir) {
   const auto loaded = localizer.load_map(dir / "lab-room.bsmap");
   localizer.set_mode(slam::Mode::kLocalization, "start");
   const RunResult rb = run_frames(localizer, run_b);
-  Trajectory traj_b_in_room;
-  for (const auto& p : localizer.trajectory()) traj_b_in_room.push_back({p.timestamp, ate_a.est_to_gt.transform_pose(p.pose)});
+  const Trajectory traj_b_in_room = transformed(localizer.trajectory(), ate_a.est_to_gt);
   write_tum_trajectory(dir / "localize-run-trajectory.txt", localizer.trajectory());
   const AteResult ate_b = absolute_trajectory_error(run_b.groundtruth(), traj_b_in_room, Alignment::kNone);
 

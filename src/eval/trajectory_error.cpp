@@ -55,6 +55,13 @@ std::vector<std::pair<std::size_t, std::size_t>> associate_trajectories(const Tr
   return associate_timestamps(a, b, max_difference);
 }
 
+Trajectory transformed(const Trajectory& est, const Sim3& transform) {
+  Trajectory out;
+  out.reserve(est.size());
+  for (const auto& p : est) out.push_back({p.timestamp, transform.transform_pose(p.pose)});
+  return out;
+}
+
 AteResult absolute_trajectory_error(const Trajectory& gt, const Trajectory& est, Alignment alignment,
                                     double max_difference) {
   AteResult r;

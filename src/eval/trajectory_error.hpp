@@ -38,6 +38,11 @@ struct AteResult {
 AteResult absolute_trajectory_error(const Trajectory& gt, const Trajectory& est, Alignment alignment,
                                     double max_difference = 0.02);
 
+// Every pose of `est` moved by a fixed transform, e.g. an earlier result's est_to_gt: a second
+// run measured in the first run's aligned frame (then with Alignment::kNone), or an estimate
+// written out in the ground truth's frame.
+Trajectory transformed(const Trajectory& est, const Sim3& transform);
+
 struct RpeResult {
   ErrorStats translation;  // metres per delta
   ErrorStats rotation;     // degrees per delta

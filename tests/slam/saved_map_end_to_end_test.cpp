@@ -169,9 +169,7 @@ std::vector<std::uint8_t> bytes_of(const fs::path& p) {
 
 // ATE of a run placed in A's aligned frame: A's SLAM-to-truth transform applied, no new fit.
 ErrorStats ate_in_first_frame(const Trajectory& gt, const Trajectory& est, const Sim3& est_to_gt) {
-  Trajectory moved;
-  for (const auto& p : est) moved.push_back({p.timestamp, est_to_gt.transform_pose(p.pose)});
-  return absolute_trajectory_error(gt, moved, Alignment::kNone).stats;
+  return absolute_trajectory_error(gt, transformed(est, est_to_gt), Alignment::kNone).stats;
 }
 
 TEST(SavedMapEndToEnd, MappingFreesCulledKeyframesAndPoints) {
