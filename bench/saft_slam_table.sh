@@ -4,6 +4,7 @@
 #   lab-room     generated, handheld, FRAMES frames, seed 1
 #   low-texture  generated, handheld, FRAMES frames, seed 1
 #   blurred      generated lab-room, handheld, 20 ms motion blur, FRAMES frames, seed 2
+#   blurred-33ms the same motion with a 33 ms shutter (the longest at 30 fps)
 #   kitchen      the real ../shared/data/7scenes-kitchen (first FRAMES frames; skipped when absent)
 # with local mapping in its thread (as a user runs it), plus tracked frames, frames per
 # second and, for the learning modes, frames per weight update. Online learning runs in its
@@ -14,7 +15,7 @@ cd "$(dirname "$0")/.."
 RUNS=${RUNS:-5}
 FRAMES=${FRAMES:-300}
 METHODS=${METHODS:-"orb offline continuous discrete"}
-SEQUENCES=${SEQUENCES:-"lab-room low-texture blurred kitchen"}
+SEQUENCES=${SEQUENCES:-"lab-room low-texture blurred blurred-33ms kitchen"}
 B=$PWD/build/release/apps/builtscene/builtscene
 OUT=$PWD/bench-out/saft_slam
 mkdir -p "$OUT"
@@ -23,6 +24,7 @@ dataset() {
     lab-room) echo "$OUT/data/lab-room" ;;
     low-texture) echo "$OUT/data/low-texture" ;;
     blurred) echo "$OUT/data/blurred" ;;
+    blurred-33ms) echo "$OUT/data/blurred-33ms" ;;
     kitchen) echo "$PWD/../shared/data/7scenes-kitchen" ;;
   esac
 }
@@ -34,6 +36,7 @@ make_data() {
     lab-room) "$B" synth rgbd --scene lab-room --motion handheld --frames "$FRAMES" --seed 1 --out "$d" >/dev/null ;;
     low-texture) "$B" synth rgbd --scene low-texture --motion handheld --frames "$FRAMES" --seed 1 --out "$d" >/dev/null ;;
     blurred) "$B" synth rgbd --scene lab-room --motion handheld --blur --frames "$FRAMES" --seed 2 --out "$d" >/dev/null ;;
+    blurred-33ms) "$B" synth rgbd --scene lab-room --motion handheld --exposure-ms 33 --frames "$FRAMES" --seed 2 --out "$d" >/dev/null ;;
     kitchen) [ -d "$d" ] || return 1 ;;
   esac
 }

@@ -14,6 +14,7 @@ struct SynthRgbdCli {
   std::string motion = "handheld";
   std::string noise = "kinect";
   std::string out;
+  double exposure_ms = 20.0;
 };
 
 const bool registered_synth_rgbd = register_command({
@@ -29,11 +30,17 @@ const bool registered_synth_rgbd = register_command({
       cmd.add_option("--seed", c->opt.seed, "Seed of the motion and the noise")->capture_default_str();
       cmd.add_option("--motion", c->motion, "handheld | robot")->capture_default_str();
       cmd.add_option("--loops", c->opt.loops, "Robot: times around the scene's loop")->capture_default_str();
-      cmd.add_flag("--blur", c->opt.blur, "Motion blur integrated over a 20 ms exposure");
+      cmd.add_flag("--blur", c->opt.blur, "Motion blur integrated over the exposure (--exposure-ms)");
+      auto* exposure = cmd.add_option("--exposure-ms", c->exposure_ms, "Shutter time of --blur in ms, 1 to 33 (implies --blur)")->capture_default_str();
       cmd.add_option("--noise", c->noise, "none | kinect (depth and image noise)")->capture_default_str();
       cmd.add_flag("--exposure-changes", c->opt.exposure_changes, "Auto-exposure drift and steps");
       cmd.add_option("--render-threads", c->opt.render_threads, "Rendering threads (output does not depend on it)")->capture_default_str();
-      return [c, frames] {
+      return [c, frames, exposure] {
+        if (exposure->count() > 0) {
+          if (!(c->exposure_ms >= 1.0 && c->exposure_ms <= 33.0)) throw InputError("--exposure-ms: expected 1 to 33 (one frame interval), got " + std::to_string(c->exposure_ms));
+          c->opt.blur = true;
+        }
+        c->opt.exposure_time_s = c->exposure_ms / 1000.0;
         if (c->motion == "handheld") c->opt.motion = synth::MotionKind::Handheld;
         else if (c->motion == "robot") c->opt.motion = synth::MotionKind::Robot;
         else throw InputError("--motion: expected handheld or robot, got '" + c->motion + "'");

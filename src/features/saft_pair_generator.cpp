@@ -10,6 +10,34 @@
 
 namespace builtscene {
 
+cv::Mat linear_motion_blur(const cv::Mat& image, double length_px, double angle_rad) {
+  if (!(length_px > 1.0)) return image.clone();
+  // The kernel is the segment, splatted bilinearly from dense samples so that sub-pixel
+  // lengths and any angle give a kernel whose mean is the centre and whose spread is the
+  // segment's (length^2 / 12 along it).
+  const int half = static_cast<int>(std::ceil(length_px / 2.0)) + 1;
+  cv::Mat kernel = cv::Mat::zeros(2 * half + 1, 2 * half + 1, CV_32F);
+  const int samples = static_cast<int>(std::ceil(length_px * 8.0));
+  const double c = std::cos(angle_rad), s = std::sin(angle_rad);
+  for (int k = 0; k < samples; ++k) {
+    const double t = ((k + 0.5) / samples - 0.5) * length_px;
+    const double x = half + t * c, y = half + t * s;
+    const int x0 = static_cast<int>(std::floor(x)), y0 = static_cast<int>(std::floor(y));
+    const double fx = x - x0, fy = y - y0;
+    kernel.at<float>(y0, x0) += static_cast<float>((1 - fx) * (1 - fy));
+    kernel.at<float>(y0, x0 + 1) += static_cast<float>(fx * (1 - fy));
+    kernel.at<float>(y0 + 1, x0) += static_cast<float>((1 - fx) * fy);
+    kernel.at<float>(y0 + 1, x0 + 1) += static_cast<float>(fx * fy);
+  }
+  kernel /= cv::sum(kernel)[0];
+  // filter2D correlates; the flipped kernel makes it a convolution (the segment is symmetric
+  // about its centre, so this only matters for rounding).
+  cv::Mat flipped, out;
+  cv::flip(kernel, flipped, -1);
+  cv::filter2D(image, out, -1, flipped, cv::Point(-1, -1), 0.0, cv::BORDER_REFLECT_101);
+  return out;
+}
+
 WarpedImage random_warp(const cv::Mat& gray, const SaftPairGeneratorOptions& o, std::mt19937_64& rng) {
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   const double w = gray.cols, hgt = gray.rows;
@@ -29,13 +57,19 @@ WarpedImage random_warp(const cv::Mat& gray, const SaftPairGeneratorOptions& o, 
   out.h = cv::Matx33d(cv::getPerspectiveTransform(src, dst));
   cv::warpPerspective(gray, out.image, out.h, gray.size(), cv::INTER_LINEAR, cv::BORDER_REFLECT_101);
 
-  // Photometric changes: contrast and brightness, then blur (half the time), then noise.
+  // Photometric changes: contrast and brightness, then blur (half the time: linear motion
+  // or defocus), then noise.
   std::uniform_real_distribution<double> unit(0.0, 1.0);
   cv::Mat f;
   out.image.convertTo(f, CV_32F, 0.6 + 0.8 * unit(rng), 40.0 * u(rng));
   if (unit(rng) < 0.5) {
-    const double sigma = 0.4 + 1.4 * unit(rng);
-    cv::GaussianBlur(f, f, cv::Size(0, 0), sigma);
+    if (unit(rng) < o.motion_blur_share) {
+      const double length = 2.0 + (o.max_motion_blur_px - 2.0) * unit(rng);
+      f = linear_motion_blur(f, length, CV_PI * unit(rng));
+    } else {
+      const double sigma = 0.4 + 1.4 * unit(rng);
+      cv::GaussianBlur(f, f, cv::Size(0, 0), sigma);
+    }
   }
   cv::Mat noise(f.size(), CV_32F);
   cv::RNG cvrng(static_cast<std::uint64_t>(rng()));

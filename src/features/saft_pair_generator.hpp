@@ -2,7 +2,8 @@
 // Training data for SAFT without a patch data set: each image is warped by random
 // homographies and photometric changes (brightness, contrast, blur, noise); ORB keypoints of
 // the original and their mapped positions in the warped copy give matching patch pairs with
-// exact ground truth. Non-matching pairs combine patches of two different keypoints.
+// exact ground truth. Blur is isotropic (defocus) or linear (camera motion during the
+// exposure, as a handheld or robot camera sees it). Non-matching pairs combine patches of two different keypoints.
 #include <cstdint>
 #include <random>
 #include <vector>
@@ -21,6 +22,11 @@ struct SaftPairGeneratorOptions {
   double max_log_scale = 0.45;
   double max_rotation_deg = 30.0;
   double max_perspective = 0.12;
+  // Half the warped copies are blurred; of those, this share with a linear motion kernel of
+  // up to max_motion_blur_px pixels (the generated 20 ms exposure smears up to ~14 px) and
+  // the rest with a Gaussian.
+  double motion_blur_share = 0.5;
+  double max_motion_blur_px = 14.0;
   std::uint64_t seed = 1;
 };
 
@@ -43,6 +49,11 @@ struct WarpedImage {
   cv::Mat image;
 };
 WarpedImage random_warp(const cv::Mat& gray, const SaftPairGeneratorOptions& options, std::mt19937_64& rng);
+
+// The image seen by a camera that moved `length_px` pixels along direction `angle_rad`
+// (image x to the right, y down) during the exposure: the average of the image over that
+// segment, centred on each pixel; borders reflected. Any depth; float images stay float.
+cv::Mat linear_motion_blur(const cv::Mat& image, double length_px, double angle_rad);
 
 // Index of a partner for row i that is a different keypoint (another image, or at least
 // `min_distance` level-0 pixels away); drawn uniformly among the others.

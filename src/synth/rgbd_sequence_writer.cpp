@@ -252,7 +252,9 @@ nlohmann::json generate_rgbd_sequence(const RgbdSequenceOptions& opt) {
         const double span_frames = std::max(1, std::min(n - 1, i + 1) - std::max(0, i - 1));
         const double px_per_frame = (Eigen::AngleAxisd(rel.rotation()).angle() * settings.camera.fx + rel.translation().norm() * settings.camera.fx / 1.5) / span_frames;
         const double px = px_per_frame * opt.exposure_time_s * settings.fps;
-        const int K = std::clamp(static_cast<int>(std::ceil(px / 1.5)), 1, 9);
+        // At most 9 sub-frames per 20 ms of exposure (a 20 ms shutter keeps its old images).
+        const int max_subframes = static_cast<int>(std::ceil(9.0 * opt.exposure_time_s / 0.02 - 1e-9));
+        const int K = std::clamp(static_cast<int>(std::ceil(px / 1.5)), 1, max_subframes);
         blur_subframes_max = std::max(blur_subframes_max, K);
         if (K > 1) {
           cv::Mat acc = cv::Mat::zeros(ro.bgr.size(), CV_32FC3);
@@ -307,7 +309,10 @@ nlohmann::json generate_rgbd_sequence(const RgbdSequenceOptions& opt) {
   } else {
     j["fast_turns"] = motion.fast_turns;
   }
-  if (opt.blur) j["blur_subframes_max"] = blur_subframes_max;
+  if (opt.blur) {
+    j["blur_subframes_max"] = blur_subframes_max;
+    j["exposure_ms"] = opt.exposure_time_s * 1000.0;
+  }
   j["stage_ms"] = timer.summary();
   spdlog::info("synth rgbd: {} frames of {} in {:.1f} s ({:.1f} fps) -> {}", n, opt.scene, seconds, n / seconds, opt.out.string());
   return j;

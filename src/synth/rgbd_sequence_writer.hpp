@@ -22,7 +22,7 @@ struct RgbdSequenceOptions {
   bool blur = false;              // motion blur integrated over the exposure time
   bool kinect_noise = true;       // false: exact depth and noise-free colour
   bool exposure_changes = false;  // slow auto-exposure drift and steps
-  double exposure_time_s = 0.02;  // shutter time for --blur
+  double exposure_time_s = 0.02;  // shutter time for --blur; at most one frame interval (1/fps)
   int render_threads = 1;         // rendering threads (bands of rows)
   int finish_threads = 2;         // sensor noise + PNG encoding threads (frames in parallel)
   int width = 640, height = 480;  // intrinsics scale with the size (tests use smaller images)

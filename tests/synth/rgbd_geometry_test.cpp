@@ -5,6 +5,9 @@
 #include <fstream>
 #include <iterator>
 
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
 #include "io/tum_dataset.hpp"
 #include "rgbd_test_util.hpp"
 #include "synth/renderer.hpp"
@@ -193,4 +196,40 @@ TEST(RgbdGeometry, SameSeedSameBytes) {
   synth::generate_rgbd_sequence(o);
   EXPECT_NE(read(a / "groundtruth.txt"), read(o.out / "groundtruth.txt"));
   for (const auto& d : {a, b, o.out}) std::filesystem::remove_all(d);
+}
+
+TEST(RgbdGeometry, ALongerShutterSmearsMore) {
+  // The same frames of a moving camera, without blur and with 10 ms and 33 ms shutters: the
+  // image's fine detail (variance of the Laplacian, noise off) must fall as the shutter opens.
+  auto sharpness = [](const std::filesystem::path& dir) {
+    std::filesystem::path last;  // the last frame: the camera is moving by then
+    for (const auto& e : std::filesystem::directory_iterator(dir / "rgb")) last = std::max(last, e.path());
+    const cv::Mat img = cv::imread(last.string(), cv::IMREAD_GRAYSCALE);
+    cv::Mat lap;
+    cv::Laplacian(img, lap, CV_64F);
+    cv::Scalar mean, sd;
+    cv::meanStdDev(lap, mean, sd);
+    return sd[0] * sd[0];
+  };
+  synth::RgbdSequenceOptions o;
+  o.scene = "lab-room";
+  o.frames = 12;
+  o.seed = 3;
+  o.kinect_noise = false;
+  o.out = temp_dir("shutter_none");
+  synth::generate_rgbd_sequence(o);
+  const double none = sharpness(o.out);
+  std::filesystem::remove_all(o.out);
+  o.blur = true;
+  std::vector<double> blurred;
+  for (const double s : {0.010, 0.033}) {
+    o.exposure_time_s = s;
+    o.out = temp_dir("shutter");
+    const auto j = synth::generate_rgbd_sequence(o);
+    EXPECT_GT(j.at("blur_subframes_max").get<int>(), 1);
+    blurred.push_back(sharpness(o.out));
+    std::filesystem::remove_all(o.out);
+  }
+  EXPECT_LT(blurred[0], 0.95 * none);
+  EXPECT_LT(blurred[1], 0.95 * blurred[0]);
 }
