@@ -34,6 +34,9 @@ const bool registered_synth_rgbd = register_command({
       auto* exposure = cmd.add_option("--exposure-ms", c->exposure_ms, "Shutter time of --blur in ms, 1 to 33 (implies --blur)")->capture_default_str();
       cmd.add_option("--noise", c->noise, "none | kinect (depth and image noise)")->capture_default_str();
       cmd.add_flag("--exposure-changes", c->opt.exposure_changes, "Auto-exposure drift and steps");
+      cmd.add_option("--light-fade", c->opt.light_fade_to,
+                     "The light falls linearly to this fraction by the last frame (0.02 to 1); auto-gain keeps the brightness, so noise grows")
+          ->capture_default_str();
       cmd.add_option("--render-threads", c->opt.render_threads, "Rendering threads (output does not depend on it)")->capture_default_str();
       return [c, frames, exposure] {
         if (exposure->count() > 0) {
@@ -41,6 +44,7 @@ const bool registered_synth_rgbd = register_command({
           c->opt.blur = true;
         }
         c->opt.exposure_time_s = c->exposure_ms / 1000.0;
+        if (!(c->opt.light_fade_to >= 0.02 && c->opt.light_fade_to <= 1.0)) throw InputError("--light-fade: expected 0.02 to 1, got " + std::to_string(c->opt.light_fade_to));
         if (c->motion == "handheld") c->opt.motion = synth::MotionKind::Handheld;
         else if (c->motion == "robot") c->opt.motion = synth::MotionKind::Robot;
         else throw InputError("--motion: expected handheld or robot, got '" + c->motion + "'");

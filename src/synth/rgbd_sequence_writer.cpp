@@ -274,6 +274,11 @@ nlohmann::json generate_rgbd_sequence(const RgbdSequenceOptions& opt) {
       job.render = std::move(ro);
       job.color = color;
       if (opt.exposure_changes) job.color.exposure *= exposure_gain(t - t0, opt.seed);
+      if (opt.light_fade_to != 1.0) {
+        const double light = 1.0 + (opt.light_fade_to - 1.0) * (n > 1 ? static_cast<double>(i) / (n - 1) : 0.0);
+        job.color.exposure *= light;
+        job.color.gain /= light;
+      }
       job.rgb_path = opt.out / "rgb" / name;
       job.depth_path = opt.out / "depth" / name;
       finisher.push(std::move(job));
@@ -294,6 +299,7 @@ nlohmann::json generate_rgbd_sequence(const RgbdSequenceOptions& opt) {
   j["noise"] = opt.kinect_noise ? "kinect" : "none";
   j["blur"] = opt.blur;
   j["exposure_changes"] = opt.exposure_changes;
+  j["light_fade_to"] = opt.light_fade_to;
   j["seed"] = opt.seed;
   j["frames"] = n;
   j["seconds"] = seconds;

@@ -23,6 +23,9 @@ struct RgbdSequenceOptions {
   bool kinect_noise = true;       // false: exact depth and noise-free colour
   bool exposure_changes = false;  // slow auto-exposure drift and steps
   double exposure_time_s = 0.02;  // shutter time for --blur; at most one frame interval (1/fps)
+  // The light falls linearly over the sequence to this fraction of its start (1: constant);
+  // the camera's auto-gain keeps the picture's brightness, so its noise grows as the light fades.
+  double light_fade_to = 1.0;
   int render_threads = 1;         // rendering threads (bands of rows)
   int finish_threads = 2;         // sensor noise + PNG encoding threads (frames in parallel)
   int width = 640, height = 480;  // intrinsics scale with the size (tests use smaller images)

@@ -146,6 +146,7 @@ cv::Mat apply_color_camera(const cv::Mat& radiance, const ColorCameraModel& m, F
       for (int c = 0; c < 3; ++c) {
         float v = in[3 * x + c] * g;
         if (m.noise) v += gn[c] * std::sqrt(read_var + shot * std::max(v, 0.f));
+        v *= static_cast<float>(m.gain);
         o[3 * x + c] = static_cast<uint8_t>(std::clamp(std::lround(v), 0L, 255L));
       }
     }

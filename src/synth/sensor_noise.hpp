@@ -45,6 +45,7 @@ cv::Mat apply_kinect_noise(const cv::Mat& depth, const cv::Mat& incidence, const
 
 struct ColorCameraModel {
   double exposure = 1.0;        // gain applied to the render's radiance
+  double gain = 1.0;            // amplifier gain after the sensor's noise (auto-gain in the dark)
   bool noise = true;            // shot + read noise
   double read_sigma = 1.6;      // 8-bit units
   double shot_gain = 0.12;      // variance per unit of signal

@@ -51,6 +51,9 @@ TEST(RgbdCli, BadInputExitsTwoNamingTheCulprit) {
   r = run("synth rgbd --scene lab-room --exposure-ms 50 --out " + dir.string());  // longer than a frame
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.out.find("--exposure-ms"), std::string::npos) << r.out;
+  r = run("synth rgbd --scene lab-room --light-fade 0 --out " + dir.string());
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.out.find("--light-fade"), std::string::npos) << r.out;
   // A regular file where the folder should be, and a folder under it.
   std::filesystem::create_directories(dir);
   std::ofstream(dir / "file") << "x";

@@ -233,3 +233,34 @@ TEST(RgbdGeometry, ALongerShutterSmearsMore) {
   EXPECT_LT(blurred[0], 0.95 * none);
   EXPECT_LT(blurred[1], 0.95 * blurred[0]);
 }
+
+TEST(RgbdGeometry, FadingLightKeepsTheBrightnessAndRaisesTheNoise) {
+  // Same motion and noise seed, with and without a fade to 5 % of the light: the first frame
+  // (full light) is the same image; in the last one auto-gain keeps the mean brightness while
+  // the sensor noise, amplified 20 times, grows far above the unfaded camera's.
+  synth::RgbdSequenceOptions o;
+  o.scene = "lab-room";
+  o.frames = 5;
+  o.seed = 4;
+  o.width = 320;
+  o.height = 240;
+  auto frames = [&](double fade) {
+    o.light_fade_to = fade;
+    o.out = temp_dir("fade");
+    synth::generate_rgbd_sequence(o);
+    std::vector<std::filesystem::path> files;
+    for (const auto& e : std::filesystem::directory_iterator(o.out / "rgb")) files.push_back(e.path());
+    std::sort(files.begin(), files.end());
+    std::vector<cv::Mat> out{cv::imread(files.front().string(), cv::IMREAD_GRAYSCALE), cv::imread(files.back().string(), cv::IMREAD_GRAYSCALE)};
+    std::filesystem::remove_all(o.out);
+    return out;
+  };
+  const auto steady = frames(1.0), faded = frames(0.05);
+  EXPECT_EQ(cv::norm(steady[0], faded[0], cv::NORM_INF), 0.0);
+  cv::Mat diff;
+  cv::subtract(faded[1], steady[1], diff, cv::noArray(), CV_32F);
+  cv::Scalar mean, sd;
+  cv::meanStdDev(diff, mean, sd);
+  EXPECT_LT(std::abs(mean[0]), 6.0);  // clipping at 255 of the brighter noise shifts it a little
+  EXPECT_GT(sd[0], 8.0);              // the unfaded read noise is 1.6 levels
+}
