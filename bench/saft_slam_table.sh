@@ -5,6 +5,7 @@
 #   low-texture  generated, handheld, FRAMES frames, seed 1
 #   blurred      generated lab-room, handheld, 20 ms motion blur, FRAMES frames, seed 2
 #   blurred-33ms the same motion with a 33 ms shutter (the longest at 30 fps)
+#   fading       generated lab-room, handheld, the light fading to 5 % (auto-gain: noise x20), seed 3
 #   kitchen      the real ../shared/data/7scenes-kitchen (first FRAMES frames; skipped when absent)
 # with local mapping in its thread (as a user runs it), plus tracked frames, frames per
 # second and, for the learning modes, frames per weight update. Online learning runs in its
@@ -15,7 +16,7 @@ cd "$(dirname "$0")/.."
 RUNS=${RUNS:-5}
 FRAMES=${FRAMES:-300}
 METHODS=${METHODS:-"orb offline continuous discrete"}
-SEQUENCES=${SEQUENCES:-"lab-room low-texture blurred blurred-33ms kitchen"}
+SEQUENCES=${SEQUENCES:-"lab-room low-texture blurred blurred-33ms fading kitchen"}
 B=$PWD/build/release/apps/builtscene/builtscene
 OUT=$PWD/bench-out/saft_slam
 mkdir -p "$OUT"
@@ -25,6 +26,7 @@ dataset() {
     low-texture) echo "$OUT/data/low-texture" ;;
     blurred) echo "$OUT/data/blurred" ;;
     blurred-33ms) echo "$OUT/data/blurred-33ms" ;;
+    fading) echo "$OUT/data/fading" ;;
     kitchen) echo "$PWD/../shared/data/7scenes-kitchen" ;;
   esac
 }
@@ -37,6 +39,7 @@ make_data() {
     low-texture) "$B" synth rgbd --scene low-texture --motion handheld --frames "$FRAMES" --seed 1 --out "$d" >/dev/null ;;
     blurred) "$B" synth rgbd --scene lab-room --motion handheld --blur --frames "$FRAMES" --seed 2 --out "$d" >/dev/null ;;
     blurred-33ms) "$B" synth rgbd --scene lab-room --motion handheld --exposure-ms 33 --frames "$FRAMES" --seed 2 --out "$d" >/dev/null ;;
+    fading) "$B" synth rgbd --scene lab-room --motion handheld --light-fade 0.05 --frames "$FRAMES" --seed 3 --out "$d" >/dev/null ;;
     kitchen) [ -d "$d" ] || return 1 ;;
   esac
 }

@@ -3,7 +3,8 @@
 // homographies and photometric changes (brightness, contrast, blur, noise); ORB keypoints of
 // the original and their mapped positions in the warped copy give matching patch pairs with
 // exact ground truth. Blur is isotropic (defocus) or linear (camera motion during the
-// exposure, as a handheld or robot camera sees it). Non-matching pairs combine patches of two different keypoints.
+// exposure, as a handheld or robot camera sees it). Non-matching pairs combine patches of
+// two different keypoints.
 #include <cstdint>
 #include <random>
 #include <vector>
