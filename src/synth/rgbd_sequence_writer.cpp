@@ -183,6 +183,10 @@ nlohmann::json generate_rgbd_sequence(const RgbdSequenceOptions& opt) {
   if (opt.frames < 0 || opt.frames > 200000) throw InputError("--frames: must be between 1 and 200000, got " + std::to_string(opt.frames));
   if (opt.loops < 1 || opt.loops > 100) throw InputError("--loops: must be between 1 and 100, got " + std::to_string(opt.loops));
   if (opt.width < 64 || opt.height < 48 || opt.width > 4096 || opt.height > 4096) throw InputError("image size out of range");
+  // The sub-frames interpolate between the neighbouring poses, so a shutter cannot outlast a frame.
+  if (opt.blur && !(opt.exposure_time_s >= 0.001 && opt.exposure_time_s <= 0.033))
+    throw InputError("--exposure-ms: expected 1 to 33 (one frame interval), got " + std::to_string(opt.exposure_time_s * 1000.0));
+  if (!(opt.light_fade_to >= 0.02 && opt.light_fade_to <= 1.0)) throw InputError("--light-fade: expected 0.02 to 1, got " + std::to_string(opt.light_fade_to));
   if (opt.out.empty()) throw InputError("--out: an output folder is required");
   check_writable(opt.out);
   check_writable(opt.out / "rgb");
@@ -226,6 +230,8 @@ nlohmann::json generate_rgbd_sequence(const RgbdSequenceOptions& opt) {
   color.exposure = 1.15;
   color.noise = opt.kinect_noise;
   int blur_subframes_max = 1;
+  // At most 9 sub-frames per 20 ms of exposure (a 20 ms shutter keeps its old images).
+  const int max_subframes = static_cast<int>(std::ceil(9.0 * opt.exposure_time_s / 0.02 - 1e-9));
   double mean_valid = 0;
   {
     FrameFinisher finisher(std::max(1, opt.finish_threads), n, opt.seed, opt.kinect_noise, settings.depth_map_factor, timer);
@@ -252,8 +258,6 @@ nlohmann::json generate_rgbd_sequence(const RgbdSequenceOptions& opt) {
         const double span_frames = std::max(1, std::min(n - 1, i + 1) - std::max(0, i - 1));
         const double px_per_frame = (Eigen::AngleAxisd(rel.rotation()).angle() * settings.camera.fx + rel.translation().norm() * settings.camera.fx / 1.5) / span_frames;
         const double px = px_per_frame * opt.exposure_time_s * settings.fps;
-        // At most 9 sub-frames per 20 ms of exposure (a 20 ms shutter keeps its old images).
-        const int max_subframes = static_cast<int>(std::ceil(9.0 * opt.exposure_time_s / 0.02 - 1e-9));
         const int K = std::clamp(static_cast<int>(std::ceil(px / 1.5)), 1, max_subframes);
         blur_subframes_max = std::max(blur_subframes_max, K);
         if (K > 1) {

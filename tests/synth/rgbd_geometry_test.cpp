@@ -198,13 +198,19 @@ TEST(RgbdGeometry, SameSeedSameBytes) {
   for (const auto& d : {a, b, o.out}) std::filesystem::remove_all(d);
 }
 
+// The first and the last colour frame of a generated folder, in grey.
+std::pair<cv::Mat, cv::Mat> first_and_last_frames(const std::filesystem::path& dir) {
+  std::vector<std::filesystem::path> files;
+  for (const auto& e : std::filesystem::directory_iterator(dir / "rgb")) files.push_back(e.path());
+  std::sort(files.begin(), files.end());
+  return {cv::imread(files.front().string(), cv::IMREAD_GRAYSCALE), cv::imread(files.back().string(), cv::IMREAD_GRAYSCALE)};
+}
+
 TEST(RgbdGeometry, ALongerShutterSmearsMore) {
   // The same frames of a moving camera, without blur and with 10 ms and 33 ms shutters: the
   // image's fine detail (variance of the Laplacian, noise off) must fall as the shutter opens.
   auto sharpness = [](const std::filesystem::path& dir) {
-    std::filesystem::path last;  // the last frame: the camera is moving by then
-    for (const auto& e : std::filesystem::directory_iterator(dir / "rgb")) last = std::max(last, e.path());
-    const cv::Mat img = cv::imread(last.string(), cv::IMREAD_GRAYSCALE);
+    const cv::Mat img = first_and_last_frames(dir).second;  // the camera is moving by then
     cv::Mat lap;
     cv::Laplacian(img, lap, CV_64F);
     cv::Scalar mean, sd;
@@ -248,17 +254,14 @@ TEST(RgbdGeometry, FadingLightKeepsTheBrightnessAndRaisesTheNoise) {
     o.light_fade_to = fade;
     o.out = temp_dir("fade");
     synth::generate_rgbd_sequence(o);
-    std::vector<std::filesystem::path> files;
-    for (const auto& e : std::filesystem::directory_iterator(o.out / "rgb")) files.push_back(e.path());
-    std::sort(files.begin(), files.end());
-    std::vector<cv::Mat> out{cv::imread(files.front().string(), cv::IMREAD_GRAYSCALE), cv::imread(files.back().string(), cv::IMREAD_GRAYSCALE)};
+    auto out = first_and_last_frames(o.out);
     std::filesystem::remove_all(o.out);
     return out;
   };
   const auto steady = frames(1.0), faded = frames(0.05);
-  EXPECT_EQ(cv::norm(steady[0], faded[0], cv::NORM_INF), 0.0);
+  EXPECT_EQ(cv::norm(steady.first, faded.first, cv::NORM_INF), 0.0);
   cv::Mat diff;
-  cv::subtract(faded[1], steady[1], diff, cv::noArray(), CV_32F);
+  cv::subtract(faded.second, steady.second, diff, cv::noArray(), CV_32F);
   cv::Scalar mean, sd;
   cv::meanStdDev(diff, mean, sd);
   EXPECT_LT(std::abs(mean[0]), 6.0);  // clipping at 255 of the brighter noise shifts it a little
