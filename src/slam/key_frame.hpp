@@ -61,6 +61,13 @@ class KeyFrame : public std::enable_shared_from_this<KeyFrame> {
   // Joins the tree under `p` (once; no-op when already linked).
   void link_to_parent(KeyFrame& p);
   SE3 T_cp;                      // pose relative to parent, frozen when this keyframe turns bad
+  // Made while the depth-odometry bridge held the pose (features could not): it shares no map
+  // point with older keyframes, so covisibility cannot give it a parent. `odometry_parent` is
+  // the keyframe the bridge carried the pose from, until local mapping makes it the parent
+  // (and drops this pointer); `parent_by_odometry` then tells the essential graph to weigh
+  // that edge as odometry, not as shared points.
+  std::shared_ptr<KeyFrame> odometry_parent;
+  bool parent_by_odometry = false;
 
   // Bag of words of the keypoint descriptors and its direct index, set once when the keyframe
   // enters the KeyFrameDatabase (empty before). Guarded by the map lock like the rest.

@@ -193,6 +193,17 @@ void LocalMapping::insert_into_map(KeyFrame& kf) {
     }
   }
   kf.update_connections();
+  // Sharing no point, it joins the spanning tree under the keyframe the bridge started from
+  // (or the nearest unculled ancestor), so loop corrections and global BA carry it along.
+  if (!kf.has_parent_link && kf.odometry_parent) {
+    KeyFrame* p = kf.odometry_parent.get();
+    while (p->bad && p->parent) p = p->parent.get();
+    if (!p->bad) {
+      kf.link_to_parent(*p);
+      kf.parent_by_odometry = true;
+    }
+  }
+  kf.odometry_parent.reset();
 }
 
 void LocalMapping::cull_recent_points(const KeyFrame& kf) {

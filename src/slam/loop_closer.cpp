@@ -352,10 +352,10 @@ void LoopCloser::correct(const std::shared_ptr<KeyFrame>& kf, const LoopMatch& m
         graph.nodes.push_back({k->pose(), k.get() == cand});
       }
       std::set<std::pair<long, long>> done;
-      auto add_edge = [&](const KeyFrame* a, const KeyFrame* b, const SE3& Ta, const SE3& Tb) {
+      auto add_edge = [&](const KeyFrame* a, const KeyFrame* b, const SE3& Ta, const SE3& Tb, double weight = 1.0) {
         if (!node.count(a) || !node.count(b) || a == b) return;
         if (!done.insert({std::min(a->id, b->id), std::max(a->id, b->id)}).second) return;
-        graph.edges.push_back({node[a], node[b], Ta * Tb.inverse(), 1.0});
+        graph.edges.push_back({node[a], node[b], Ta * Tb.inverse(), weight});
       };
       auto old_pose = [&](const KeyFrame* k) {
         const auto it = before.find(k);
@@ -366,10 +366,29 @@ void LoopCloser::correct(const std::shared_ptr<KeyFrame>& kf, const LoopMatch& m
         if (l.weight >= opt_.strong_covisibility) add_edge(l.a, l.b, l.a->pose(), l.b->pose());
       for (const auto& k : live) {
         if (k->bad) continue;
-        if (k->parent && !k->parent->bad) add_edge(k.get(), k->parent.get(), old_pose(k.get()), old_pose(k->parent.get()));
+        if (k->parent && !k->parent->bad)
+          add_edge(k.get(), k->parent.get(), old_pose(k.get()), old_pose(k->parent.get()),
+                   k->parent_by_odometry ? opt_.odometry_edge_weight : 1.0);
         for (const KeyFrame* l : k->loop_edges) add_edge(k.get(), l, old_pose(k.get()), old_pose(l));
         for (const auto& [n, w] : k->connections)
           if (w >= opt_.strong_covisibility) add_edge(k.get(), n, old_pose(k.get()), old_pose(n));
+      }
+      // Parts of the graph no edge joins move rigidly: more than one is a defect. (Keyframes
+      // local mapping has not linked yet, in threaded runs, are left out of the count.)
+      std::vector<int> root(graph.nodes.size());
+      for (std::size_t i = 0; i < root.size(); ++i) root[i] = static_cast<int>(i);
+      const auto find = [&root](int i) {
+        while (root[static_cast<std::size_t>(i)] != i) i = root[static_cast<std::size_t>(i)] = root[static_cast<std::size_t>(root[static_cast<std::size_t>(i)])];
+        return i;
+      };
+      for (const auto& ed : graph.edges) root[static_cast<std::size_t>(find(ed.i))] = find(ed.j);
+      std::set<int> part_roots;
+      for (std::size_t i = 0; i < root.size(); ++i)
+        if (i == 0 || node_kf[i]->has_parent_link) part_roots.insert(find(static_cast<int>(i)));
+      const auto parts = static_cast<long>(part_roots.size());
+      {
+        std::lock_guard s(stats_mutex_);
+        stats_.max_pose_graph_parts = std::max(stats_.max_pose_graph_parts, parts);
       }
       const auto t_pg = std::chrono::steady_clock::now();
       const auto result = optimize_pose_graph(graph, {opt_.pose_graph_iterations});
@@ -385,16 +404,6 @@ void LoopCloser::correct(const std::shared_ptr<KeyFrame>& kf, const LoopMatch& m
           const double r = (ed.T_ij.inverse() * pred).translation().norm();
           if (r > worst) worst = r, worst_edge = e;
         }
-        // Parts of the graph no edge joins move rigidly: more than one is a defect.
-        std::vector<int> root(graph.nodes.size());
-        for (std::size_t i = 0; i < root.size(); ++i) root[i] = static_cast<int>(i);
-        const auto find = [&root](int i) {
-          while (root[static_cast<std::size_t>(i)] != i) i = root[static_cast<std::size_t>(i)] = root[static_cast<std::size_t>(root[static_cast<std::size_t>(i)])];
-          return i;
-        };
-        for (const auto& ed : graph.edges) root[static_cast<std::size_t>(find(ed.i))] = find(ed.j);
-        int parts = 0;
-        for (std::size_t i = 0; i < root.size(); ++i) parts += find(static_cast<int>(i)) == static_cast<int>(i);
         spdlog::debug("pose graph: {} nodes in {} connected parts, {} edges, {} iterations max, cost {:.4g} -> {:.4g}, worst edge {} - {} off by {:.3f} m",
                       graph.nodes.size(), parts, graph.edges.size(), opt_.pose_graph_iterations, result.initial_cost, result.final_cost,
                       graph.edges.empty() ? -1L : node_kf[static_cast<std::size_t>(graph.edges[worst_edge].i)]->id,
@@ -459,10 +468,25 @@ void LoopCloser::run_global_ba(long loop, long keyframe, long matched) {
     const auto all = map_.keyframes();
     if (all.empty()) return;
     pb.K = intrinsics_of(*all.front()->f->ctx);
+    // Keyframes local mapping has not linked yet are left to follow their parent later, and so
+    // are keyframes sharing (almost) no point with the others (made on the depth-odometry
+    // bridge): with no measurement to hold them, they would stay behind while the rest moves.
+    std::unordered_set<const KeyFrame*> linked;
+    for (const auto& k : all)
+      if (!k->bad && (k->has_parent_link || k == all.front())) linked.insert(k.get());
     std::unordered_map<const KeyFrame*, int> cam_index;
     for (const auto& k : all) {
-      // Keyframes local mapping has not linked yet are left to follow their parent later.
-      if (k->bad || (!k->has_parent_link && k != all.front())) continue;
+      if (!linked.count(k.get())) continue;
+      int shared = 0;
+      for (const auto& p : k->points) {
+        if (!p || p->bad) continue;
+        for (const auto& [okf, idx] : p->observations)
+          if (okf != k.get() && linked.count(okf)) {
+            ++shared;
+            break;
+          }
+      }
+      if (shared < opt_.global_ba_min_shared_points && k != all.front()) continue;
       cam_index[k.get()] = static_cast<int>(cams.size());
       cams.push_back(k);
       pb.cameras.push_back({k->pose(), k == all.front()});  // the oldest keyframe holds the gauge

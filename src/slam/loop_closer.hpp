@@ -79,9 +79,14 @@ struct LoopClosingOptions {
   double max_correction_base_deg = 5.0;
   double max_correction_deg_per_metre = 1.0;
   int strong_covisibility = 100;  // essential-graph covisibility edges
+  // Weight of a tree edge to a keyframe made on the depth-odometry bridge (others weigh 1):
+  // frame-to-frame ICP drifts more than poses held by shared map points, so a loop's error
+  // goes there first.
+  double odometry_edge_weight = 0.1;
   int pose_graph_iterations = 20;
   bool global_bundle_adjustment = true;
   int global_ba_iterations = 10;  // Ceres iterations (robust phase; as many after outlier classification)
+  int global_ba_min_shared_points = 10;  // fewer: the keyframe follows its parent instead
 };
 
 class LoopCloser {
@@ -116,6 +121,9 @@ class LoopCloser {
     long loops = 0;
     long points_fused = 0;
     long global_ba_runs = 0, global_ba_aborted = 0, global_ba_merged = 0;
+    // The most connected parts any loop's essential graph fell into: 1 when every keyframe is
+    // tied to the rest (a part no edge joins would move rigidly and leave a step).
+    long max_pose_graph_parts = 0;
   };
   Stats stats() const;
 

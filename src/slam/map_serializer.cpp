@@ -292,7 +292,9 @@ std::vector<std::uint8_t> encode_map(const Map& map, const FrameContext& ctx, st
     kfw.pose(kf->pose());
     const bool parent_saved = kf->parent && saved_kfs.count(kf->parent.get());
     kfw.put(static_cast<std::int64_t>(parent_saved ? kf->parent->id : -1));
-    kfw.put(static_cast<std::uint8_t>(kf->has_parent_link));
+    // Tree flags: bit 0 joined the tree, bit 1 through the depth-odometry bridge (readers
+    // before bit 1 existed take any non-zero value as joined).
+    kfw.put(static_cast<std::uint8_t>((kf->has_parent_link ? 1 : 0) | (kf->parent_by_odometry ? 2 : 0)));
     kfw.put(static_cast<std::uint8_t>(kf->keep));
     const std::size_t n = f.size();
     kfw.put(static_cast<std::uint32_t>(n));
@@ -527,6 +529,7 @@ MapFileInfo decode_map(const std::uint8_t* data, std::size_t size, const std::st
   for (std::size_t k = 0; k < kfs.size(); ++k) {
     auto& kf = kfs[k];
     kf->has_parent_link = parent_links[k] != 0;
+    kf->parent_by_odometry = (parent_links[k] & 2) != 0;
     if (parent_ids[k] < 0) continue;
     if (parent_ids[k] == kf->id) kr.fail(fmt::format("keyframe {} is its own parent", kf->id));
     KeyFrame* parent = lookup(kf_by_id, parent_ids[k], kr, fmt::format("keyframe {}'s parent", kf->id));

@@ -493,8 +493,15 @@ bool Tracker::need_new_keyframe() const {
 
 void Tracker::create_new_keyframe() {
   auto kf = std::make_shared<KeyFrame>(map_.next_keyframe_id(), current_);
+  int shared = 0;
   for (std::size_t i = 0; i < current_.size(); ++i)
-    if (current_.points[i] && !current_.outlier[i] && !current_.points[i]->bad) kf->points[i] = current_.points[i];
+    if (current_.points[i] && !current_.outlier[i] && !current_.points[i]->bad) {
+      kf->points[i] = current_.points[i];
+      ++shared;
+    }
+  // No map point in common with the map (the depth-odometry bridge carried the pose): the
+  // keyframe hangs on the one the bridge carried the pose from.
+  if (shared == 0 && reference_) kf->odometry_parent = reference_;
   // New map points from depth: all close keypoints, at least new_kf_min_points nearest ones.
   std::vector<std::pair<float, std::size_t>> by_depth;
   for (std::size_t i = 0; i < current_.size(); ++i)

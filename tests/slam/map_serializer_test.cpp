@@ -265,6 +265,27 @@ TEST(MapSerializer, LoopEdgesRoundTrip) {
   EXPECT_EQ(encode_map(loaded, *a.ctx, 0), a.bytes);
 }
 
+// A keyframe that joined the tree through the depth-odometry bridge keeps that mark (the
+// loop closer weighs its tree edge as odometry), and the others keep theirs.
+TEST(MapSerializer, OdometryTreeLinksRoundTrip) {
+  Built a(8, 60);
+  {
+    std::lock_guard lock(a.map.mutex());
+    a.map.keyframes()[3]->parent_by_odometry = true;
+    a.bytes = encode_map(a.map, *a.ctx, 0);
+  }
+  Map loaded;
+  std::lock_guard lb(loaded.mutex());
+  decode_map(a.bytes.data(), a.bytes.size(), "mem", loaded, a.ctx);
+  const auto kfs = loaded.keyframes(), built = a.map.keyframes();
+  ASSERT_EQ(kfs.size(), 8u);
+  for (std::size_t k = 0; k < kfs.size(); ++k) {
+    EXPECT_EQ(kfs[k]->parent_by_odometry, kfs[k]->id == 3) << kfs[k]->id;
+    EXPECT_EQ(kfs[k]->has_parent_link, built[k]->has_parent_link) << kfs[k]->id;
+  }
+  EXPECT_EQ(encode_map(loaded, *a.ctx, 0), a.bytes);
+}
+
 // A version-1 file (no LOOP section) is the same map without loop edges.
 TEST(MapSerializer, VersionOneFilesStillLoad) {
   Built a(6, 50);

@@ -68,6 +68,35 @@ TEST(PoseGraphOptimizer, BiasedChainClosedByALoopMatchesTheClosedForm) {
   }
 }
 
+// The same line, but only edge m is wrong (by b) and it weighs w, the others 1 (the loop
+// closer weighs a depth-odometry edge so). Least squares gives each edge a residual in
+// inverse proportion to its weight, summing to b: r = (b / S) / weight with S = (n - 1) + 1 / w
+// over the n - 1 unit edges (chain and loop) and the weak one. Camera k ends at k - (b / S)
+// times the number of unit chain edges before it, minus the weak edge's share past m.
+TEST(PoseGraphOptimizer, AWeakEdgeTakesTheLoopErrorInInverseProportionToItsWeight) {
+  const int n = 10, m = 4;
+  const double b = 0.3, w = 0.1;
+  auto T = [](double x) { return SE3(Eigen::Quaterniond::Identity(), Eigen::Vector3d(-x, 0, 0)); };
+  std::vector<double> dead{0};
+  for (int i = 0; i + 1 < n; ++i) dead.push_back(dead.back() + 1 + (i == m ? b : 0));
+  PoseGraph g;
+  for (int i = 0; i < n; ++i) g.nodes.push_back({T(dead[static_cast<std::size_t>(i)]), i == 0});
+  for (int i = 0; i + 1 < n; ++i)
+    g.edges.push_back({i, i + 1, T(dead[static_cast<std::size_t>(i)]) * T(dead[static_cast<std::size_t>(i + 1)]).inverse(), i == m ? w : 1.0});
+  g.edges.push_back({n - 1, 0, T(n - 1) * T(0).inverse()});
+  const auto r = optimize_pose_graph(g, {50});
+  ASSERT_TRUE(r.solved);
+  const double S = (n - 1) + 1 / w, unit = b / S, weak = b / S / w;
+  double expect = 0;
+  for (int k = 0; k < n; ++k) {
+    const Eigen::Vector3d c = r.poses[static_cast<std::size_t>(k)].inverse().translation();
+    EXPECT_NEAR(c.x(), expect, 1e-6) << k;
+    expect += 1 + (k == m ? b - weak : -unit);
+  }
+  // With w = 0.1 the weak edge takes 10 / 19 of the error, each unit edge 1 / 19.
+  EXPECT_NEAR(weak / b, 10.0 / 19.0, 1e-12);
+}
+
 // A ring driven with a rotation and translation bias per step (drift), then one exact loop
 // edge: the optimized ring is much closer to the truth than dead reckoning.
 TEST(PoseGraphOptimizer, DriftedRingWithOneLoopEdgeComesBackToTheTruth) {
