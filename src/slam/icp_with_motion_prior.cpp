@@ -43,7 +43,7 @@ bool point_and_normal(const cv::Mat& depth, int u, int v, double fx, double fy, 
 
 std::optional<SE3> icp_with_motion_prior(const cv::Mat& prev_depth, const cv::Mat& cur_depth, double fx, double fy,
                                          double cx, double cy, const SE3& prediction,
-                                         const IcpWithPriorOptions& o) {
+                                         const IcpWithPriorOptions& o, Eigen::Matrix<double, 6, 6>* correspondence_information) {
   if (prev_depth.type() != CV_32F || cur_depth.type() != CV_32F || prev_depth.size() != cur_depth.size())
     return std::nullopt;
   std::vector<Eigen::Vector3d> src;
@@ -92,6 +92,7 @@ std::optional<SE3> icp_with_motion_prior(const cv::Mat& prev_depth, const cv::Ma
       ++used;
     }
     if (used < o.min_correspondences) return std::nullopt;
+    if (correspondence_information) *correspondence_information = H - prior_info;
     const Vec6 delta = -H.ldlt().solve(g);
     if (!delta.allFinite()) return std::nullopt;
     T = SE3(so3_exp(delta.tail<3>()), delta.head<3>()) * T;

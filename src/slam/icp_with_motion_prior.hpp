@@ -12,6 +12,7 @@
 // checks that the result explains the current depth image.
 #include <optional>
 
+#include <Eigen/Core>
 #include <opencv2/core.hpp>
 
 #include "core/se3.hpp"
@@ -35,6 +36,7 @@ struct IcpWithPriorOptions {
 // Depth images: CV_32F metres, 0 or NaN = no reading; pinhole intrinsics without distortion.
 std::optional<SE3> icp_with_motion_prior(const cv::Mat& prev_depth, const cv::Mat& cur_depth, double fx, double fy,
                                          double cx, double cy, const SE3& prediction,
-                                         const IcpWithPriorOptions& options = {});
+                                         const IcpWithPriorOptions& options = {},
+                                         Eigen::Matrix<double, 6, 6>* correspondence_information = nullptr);
 
 }  // namespace builtscene::slam

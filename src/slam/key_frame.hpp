@@ -68,6 +68,14 @@ class KeyFrame : public std::enable_shared_from_this<KeyFrame> {
   // that edge as odometry, not as shared points.
   std::shared_ptr<KeyFrame> odometry_parent;
   bool parent_by_odometry = false;
+  // Depth link: point-to-plane ICP between this keyframe's depth image and the previous
+  // keyframe's, made by tracking; measured T_this_prev and the information of its residuals
+  // (left increment (t, w) of T_this_prev). Bundle adjustment adds it as a relative-pose
+  // term, so directions the map points cannot fix (a slide and a turn towards far points
+  // down a plain corridor) are held by the walls and floor.
+  std::weak_ptr<KeyFrame> depth_link_to;
+  SE3 depth_link_T;
+  Eigen::Matrix<double, 6, 6> depth_link_information = Eigen::Matrix<double, 6, 6>::Zero();
 
   // Bag of words of the keypoint descriptors and its direct index, set once when the keyframe
   // enters the KeyFrameDatabase (empty before). Guarded by the map lock like the rest.

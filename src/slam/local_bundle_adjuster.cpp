@@ -2,6 +2,9 @@
 
 #include <cmath>
 
+#include <Eigen/Cholesky>
+#include <ceres/rotation.h>
+
 #include "slam/reprojection_cost.hpp"
 
 namespace builtscene::slam {
@@ -30,6 +33,43 @@ double pixel_sq_error(const Intrinsics& K, const Observation& o, const Eigen::Ve
   if (K.disparity_sigma > 0) pixel.u_right = -1;
   return reprojection_chi2(K, pixel, pc) / o.inv_sigma2;
 }
+
+// A measured relative pose T_ij between two pose blocks (angle-axis, translation of T_cw):
+// residual U [t; w] of D = T_i T_j^-1 T_ij^-1 (a left increment of the measurement, as
+// icp_with_motion_prior's information is), with U^T U the information.
+struct RelativePoseInfoCost {
+  Eigen::Quaterniond q_m;
+  Eigen::Vector3d t_m;
+  Eigen::Matrix<double, 6, 6> sqrt_info;
+  template <typename T>
+  bool operator()(const T* pi, const T* pj, T* r) const {
+    T qi[4], qj[4];
+    ceres::AngleAxisToQuaternion(pi, qi);
+    ceres::AngleAxisToQuaternion(pj, qj);
+    const T qj_inv[4] = {qj[0], -qj[1], -qj[2], -qj[3]};
+    T q[4];  // predicted T_ij = T_i * T_j^-1
+    ceres::QuaternionProduct(qi, qj_inv, q);
+    T tj[3];
+    ceres::UnitQuaternionRotatePoint(q, pj + 3, tj);
+    const T t[3] = {pi[3] - tj[0], pi[4] - tj[1], pi[5] - tj[2]};
+    const T qm_inv[4] = {T(q_m.w()), T(-q_m.x()), T(-q_m.y()), T(-q_m.z())};
+    T qd[4];  // D = T_pred * T_m^-1: rotation q * qm^-1, translation t - qd * t_m
+    ceres::QuaternionProduct(q, qm_inv, qd);
+    const T tm[3] = {T(t_m.x()), T(t_m.y()), T(t_m.z())};
+    T rt[3];
+    ceres::UnitQuaternionRotatePoint(qd, tm, rt);
+    if (qd[0] < T(0))
+      for (auto& c : qd) c = -c;
+    T e[6];
+    for (int k = 0; k < 3; ++k) e[k] = t[k] - rt[k];
+    ceres::QuaternionToAngleAxis(qd, e + 3);
+    for (int a = 0; a < 6; ++a) {
+      r[a] = T(0);
+      for (int b = a; b < 6; ++b) r[a] += T(sqrt_info(a, b)) * e[b];
+    }
+    return true;
+  }
+};
 
 }  // namespace
 
@@ -92,6 +132,16 @@ BundleAdjustmentResult solve_bundle_adjustment(const BundleAdjustmentProblem& pb
                                  robust ? &huber_mono : nullptr, pose, point);
       }
       camera_used[static_cast<std::size_t>(mm.camera)] = 1;
+    }
+    for (const auto& rp : pb.relative_poses) {
+      const auto i = static_cast<std::size_t>(rp.i), j = static_cast<std::size_t>(rp.j);
+      if (i >= nc || j >= nc || i == j || (pb.cameras[i].fixed && pb.cameras[j].fixed)) continue;
+      const Eigen::LLT<Eigen::Matrix<double, 6, 6>> llt(rp.information);
+      if (llt.info() != Eigen::Success) continue;
+      problem.AddResidualBlock(new ceres::AutoDiffCostFunction<RelativePoseInfoCost, 6, 6, 6>(new RelativePoseInfoCost{
+                                   Eigen::Quaterniond(rp.T_ij.rotation_matrix()), rp.T_ij.translation(), llt.matrixU()}),
+                               nullptr, &poses[6 * i], &poses[6 * j]);
+      camera_used[i] = camera_used[j] = 1;
     }
     for (std::size_t c = 0; c < nc; ++c)
       if (camera_used[c] && pb.cameras[c].fixed) problem.SetParameterBlockConstant(&poses[6 * c]);

@@ -29,6 +29,14 @@ struct BundleAdjustmentProblem {
   std::vector<Camera> cameras;
   std::vector<Eigen::Vector3d> points;
   std::vector<Measurement> measurements;
+  // Measured relative poses T_ij = T_iw * T_jw^-1 between two cameras with their information
+  // (6 x 6, left increment (t, w) of T_ij): the keyframes' depth links.
+  struct RelativePose {
+    int i = 0, j = 0;
+    SE3 T_ij;
+    Eigen::Matrix<double, 6, 6> information;
+  };
+  std::vector<RelativePose> relative_poses;
 };
 
 struct BundleAdjustmentOptions {

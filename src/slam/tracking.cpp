@@ -2,9 +2,12 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <tuple>
 #include <unordered_map>
 
+#include "core/so3.hpp"
+#include "slam/icp_with_motion_prior.hpp"
 #include "slam/key_frame.hpp"
 #include "slam/map.hpp"
 #include "slam/map_point.hpp"
@@ -194,6 +197,27 @@ bool Tracker::track_depth_odometry() {
   current_.clear_matches();
   current_.set_pose(*T_cur_last * last_.T_cw);
   return true;
+}
+
+void Tracker::link_by_depth(KeyFrame& kf, const KeyFrame& prev) const {
+  const double w = opt_.depth_link_weight;
+  if (!(w > 0)) return;
+  const Intrinsics K = intrinsics_of(*ctx_);
+  IcpWithPriorOptions o;
+  o.iterations = 30;
+  o.min_correspondences = 100;
+  o.max_gap_m = 0.3;
+  o.prior_sigma_m = 0.05;  // tracking's relative pose, loose: the depth decides where it can
+  o.prior_sigma_rad = 0.02;
+  const SE3 predicted = kf.pose() * prev.pose_inverse();
+  Eigen::Matrix<double, 6, 6> info;
+  const auto T = icp_with_motion_prior(last_kf_depth_, depth_, K.fx, K.fy, K.cx, K.cy, predicted, o, &info);
+  if (!T) return;
+  const SE3 d = *T * predicted.inverse();
+  if (d.translation().norm() > 0.5 || so3_log(d.rotation()).norm() > 8.0 * M_PI / 180.0) return;
+  kf.depth_link_to = std::const_pointer_cast<KeyFrame>(prev.shared_from_this());
+  kf.depth_link_T = *T;
+  kf.depth_link_information = w * info;
 }
 
 void Tracker::start_lost() {
@@ -523,6 +547,11 @@ void Tracker::create_new_keyframe() {
     }
     ++n;
     if (z > ctx_->th_depth && n > wanted) break;
+  }
+  if (opt_.depth_links && !depth_.empty()) {
+    if (auto prev = last_kf_.lock(); prev && !prev->bad && !last_kf_depth_.empty()) link_by_depth(*kf, *prev);
+    last_kf_depth_ = depth_;
+    last_kf_ = kf;
   }
   map_.add_keyframe(kf);
   reference_ = kf;

@@ -43,6 +43,12 @@ struct TrackingOptions {
   std::size_t max_keyframe_queue = 3;       // keyframes waiting for local mapping (ORB-SLAM)
   std::size_t max_keyframe_queue_weak = 6;  // ... while tracking is weak
   int weak_tracking_inliers = 100;          // below: keyframes and odometry use every depth point  // when lost: reference's neighbours and newest keyframes tried
+  // Depth links between consecutive keyframes (KeyFrame::depth_link_*; local BA adds them):
+  // ICP information per residual relative to independent 1 cm noise. Off by default: an
+  // experiment on the generated corridor (docs/slam.md, later 2026-12-02 section) that fixes
+  // the keyframes there but not yet the frames between them; not tried on other worlds.
+  bool depth_links = false;
+  double depth_link_weight = 1.0;
 };
 
 enum class TrackingState { kNotInitialized, kOk, kLost };
@@ -156,6 +162,9 @@ class Tracker {
   cv::Mat gray_, depth_, last_gray_, last_depth_;  // this frame's and the last tracked frame's images
   long depth_odometry_frames_ = 0;
   bool track_depth_odometry();  // the last frame's pose moved by RGB-D odometry
+  void link_by_depth(KeyFrame& kf, const KeyFrame& prev) const;  // KeyFrame::depth_link_*
+  cv::Mat last_kf_depth_;        // the newest keyframe's depth image and the keyframe
+  std::weak_ptr<KeyFrame> last_kf_;
 
   bool initialize();
   void update_last_frame();

@@ -3,11 +3,52 @@
 // perturbed; noisy and partly wrong measurements.
 #include <gtest/gtest.h>
 
+#include <random>
+
+#include "core/so3.hpp"
 #include "slam/local_bundle_adjuster.hpp"
 #include "synthetic_scene.hpp"
 
 namespace builtscene::slam {
 namespace {
+
+// A camera with no point of its own is held by two relative-pose terms (depth links) that
+// disagree: the first is sure of the slide along x, the second of the slide along y (each
+// along its own left increment, in the first camera's rotated frame). The camera ends where
+// each term is sure: 0 along x, 0.2 m along y, whatever its start. A term read as a right
+// increment would swap x and y here (the measurement turns 90 degrees about z).
+TEST(LocalBundleAdjuster, RelativePoseTermsHoldACameraAlongTheirInformation) {
+  BundleAdjustmentProblem pb;
+  pb.K = test::kinect();
+  const SE3 A(so3_exp(Eigen::Vector3d(0, 0, M_PI / 2)), Eigen::Vector3d(0.3, -0.1, 0.5));  // T_10
+  const SE3 B = SE3(Eigen::Quaterniond::Identity(), Eigen::Vector3d(0.1, 0.2, 0)) * A;
+  std::mt19937 rng(5);
+  pb.cameras.push_back({SE3(), true});
+  pb.cameras.push_back({test::perturb(A, 0.05, 0.1, rng), false});
+  std::uniform_real_distribution<double> u(-1, 1);
+  for (int i = 0; i < 20; ++i) {
+    const Eigen::Vector3d p(u(rng), u(rng), 3 + u(rng));
+    pb.points.push_back(p);
+    BundleAdjustmentProblem::Measurement m;
+    m.camera = 0;
+    m.point = i;
+    m.o.uv = test::project(pb.K, p);
+    m.o.inv_sigma2 = 1.0;
+    pb.measurements.push_back(m);
+  }
+  Eigen::Matrix<double, 6, 6> sure_x = Eigen::Matrix<double, 6, 6>::Identity(), sure_y = sure_x;
+  sure_x(0, 0) = 1e4;
+  sure_y(1, 1) = 1e4;
+  pb.relative_poses.push_back({1, 0, A, sure_x});
+  pb.relative_poses.push_back({1, 0, B, sure_y});
+  const auto r = solve_bundle_adjustment(pb, {20, 20});
+  ASSERT_TRUE(r.solved);
+  const SE3 d = r.poses[1] * A.inverse();  // the camera's left increment from A
+  EXPECT_NEAR(d.translation().x(), 0.0, 1e-3);
+  EXPECT_NEAR(d.translation().y(), 0.2, 1e-3);
+  EXPECT_NEAR(d.translation().z(), 0.0, 1e-3);
+  EXPECT_LT(so3_log(d.rotation()).norm(), 1e-3);
+}
 
 TEST(LocalBundleAdjuster, LowersErrorAndRecoversPerturbedPoses) {
   std::mt19937 rng(7);
