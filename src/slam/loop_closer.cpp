@@ -486,7 +486,10 @@ void LoopCloser::run_global_ba(long loop, long keyframe, long matched) {
             break;
           }
       }
-      if (shared < opt_.global_ba_min_shared_points && k != all.front()) continue;
+      // A depth link to a keyframe already in the problem holds it as well.
+      const auto link = k->depth_link_to.lock();
+      const bool held_by_link = link && cam_index.count(link.get());
+      if (shared < opt_.global_ba_min_shared_points && !held_by_link && k != all.front()) continue;
       cam_index[k.get()] = static_cast<int>(cams.size());
       cams.push_back(k);
       pb.cameras.push_back({k->pose(), k == all.front()});  // the oldest keyframe holds the gauge
@@ -511,6 +514,14 @@ void LoopCloser::run_global_ba(long loop, long keyframe, long matched) {
         meas.o.inv_sigma2 = okf->f->ctx->pyramid.inv_sigma2[static_cast<std::size_t>(okf->f->keys_un[is].octave)];
         pb.measurements.push_back(meas);
       }
+    }
+    // Depth links between keyframes both in the problem (TrackingOptions::depth_links).
+    for (std::size_t c = 0; c < cams.size(); ++c) {
+      const auto to = cams[c]->depth_link_to.lock();
+      if (!to || to->bad) continue;
+      const auto it = cam_index.find(to.get());
+      if (it == cam_index.end()) continue;
+      pb.relative_poses.push_back({static_cast<int>(c), it->second, cams[c]->depth_link_T, cams[c]->depth_link_information});
     }
   }
   {

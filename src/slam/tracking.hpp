@@ -43,10 +43,10 @@ struct TrackingOptions {
   std::size_t max_keyframe_queue = 3;       // keyframes waiting for local mapping (ORB-SLAM)
   std::size_t max_keyframe_queue_weak = 6;  // ... while tracking is weak
   int weak_tracking_inliers = 100;          // below: keyframes and odometry use every depth point  // when lost: reference's neighbours and newest keyframes tried
-  // Depth links between consecutive keyframes (KeyFrame::depth_link_*; local BA adds them):
-  // ICP information per residual relative to independent 1 cm noise. Off by default: an
-  // experiment on the generated corridor (docs/slam.md, later 2026-12-02 section) that fixes
-  // the keyframes there but not yet the frames between them; not tried on other worlds.
+  // Depth links between consecutive keyframes (KeyFrame::depth_link_*; local and global BA add them):
+  // ICP information per residual relative to independent 1 cm noise. Off by default: on the
+  // generated corridor it cuts the first 1610 frames' error 4x but spoils loop closing over
+  // two loops (docs/slam.md, later 2026-12-02 section); not tried on other worlds.
   bool depth_links = false;
   double depth_link_weight = 1.0;
 };
