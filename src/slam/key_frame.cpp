@@ -1,6 +1,7 @@
 #include "slam/key_frame.hpp"
 
 #include <algorithm>
+#include <unordered_map>
 
 #include "slam/map.hpp"
 #include "slam/map_point.hpp"
@@ -112,6 +113,18 @@ void KeyFrame::set_bad(Map& map) {
   }
   children.clear();
   map.erase_keyframe(this);
+}
+
+void add_depth_links(const std::vector<std::shared_ptr<KeyFrame>>& cams, BundleAdjustmentProblem& pb) {
+  std::unordered_map<const KeyFrame*, int> index;
+  for (std::size_t c = 0; c < cams.size(); ++c) index[cams[c].get()] = static_cast<int>(c);
+  for (std::size_t c = 0; c < cams.size(); ++c) {
+    const auto to = cams[c]->depth_link_to.lock();
+    if (!to || to->bad) continue;
+    const auto it = index.find(to.get());
+    if (it == index.end()) continue;
+    pb.relative_poses.push_back({static_cast<int>(c), it->second, cams[c]->depth_link_T, cams[c]->depth_link_information});
+  }
 }
 
 }  // namespace builtscene::slam

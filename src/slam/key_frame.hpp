@@ -16,6 +16,7 @@
 #include "features/bow_vector.hpp"
 #include "slam/frame.hpp"
 #include "slam/id_order.hpp"
+#include "slam/local_bundle_adjuster.hpp"
 
 namespace builtscene::slam {
 
@@ -99,5 +100,9 @@ class KeyFrame : public std::enable_shared_from_this<KeyFrame> {
   SE3 T_cw_, T_wc_;
   void sort_connections();
 };
+
+// Adds to `pb` the depth link of every camera in `cams` (its cameras, in order) whose other
+// end is among them too. The caller holds the map lock.
+void add_depth_links(const std::vector<std::shared_ptr<KeyFrame>>& cams, BundleAdjustmentProblem& pb);
 
 }  // namespace builtscene::slam

@@ -444,13 +444,7 @@ void LocalMapping::local_bundle_adjustment(KeyFrame& kf) {
         links.push_back({okf, pts[i].get(), idx});
       }
     }
-    for (std::size_t c = 0; c < cams.size(); ++c) {
-      const auto to = cams[c]->depth_link_to.lock();
-      if (!to || to->bad) continue;
-      const auto it = cam_index.find(to.get());
-      if (it == cam_index.end()) continue;
-      pb.relative_poses.push_back({static_cast<int>(c), it->second, cams[c]->depth_link_T, cams[c]->depth_link_information});
-    }
+    add_depth_links(cams, pb);
   }
   if (abort_ba_) return;
   const auto r = solve_bundle_adjustment(pb, {}, &abort_ba_);

@@ -515,14 +515,7 @@ void LoopCloser::run_global_ba(long loop, long keyframe, long matched) {
         pb.measurements.push_back(meas);
       }
     }
-    // Depth links between keyframes both in the problem (TrackingOptions::depth_links).
-    for (std::size_t c = 0; c < cams.size(); ++c) {
-      const auto to = cams[c]->depth_link_to.lock();
-      if (!to || to->bad) continue;
-      const auto it = cam_index.find(to.get());
-      if (it == cam_index.end()) continue;
-      pb.relative_poses.push_back({static_cast<int>(c), it->second, cams[c]->depth_link_T, cams[c]->depth_link_information});
-    }
+    add_depth_links(cams, pb);  // TrackingOptions::depth_links
   }
   {
     std::lock_guard s(stats_mutex_);

@@ -18,16 +18,8 @@ struct RelativePoseCost {
   double sqrt_w;
   template <typename T>
   bool operator()(const T* pi, const T* pj, T* r) const {
-    T qi[4], qj[4];
-    ceres::AngleAxisToQuaternion(pi, qi);
-    ceres::AngleAxisToQuaternion(pj, qj);
-    // Predicted T_ij = T_i * T_j^-1.
-    const T qj_inv[4] = {qj[0], -qj[1], -qj[2], -qj[3]};
-    T q[4];
-    ceres::QuaternionProduct(qi, qj_inv, q);
-    T tj[3];
-    ceres::UnitQuaternionRotatePoint(q, pj + 3, tj);
-    const T t[3] = {pi[3] - tj[0], pi[4] - tj[1], pi[5] - tj[2]};
+    T q[4], t[3];  // predicted T_ij = T_i * T_j^-1
+    detail::relative_pose_of_blocks(pi, pj, q, t);
     // Error T_m^-1 * T_pred, expressed in the measurement's frame.
     const T qm_inv[4] = {T(q_m.w()), T(-q_m.x()), T(-q_m.y()), T(-q_m.z())};
     T qe[4];

@@ -58,6 +58,20 @@ struct PosePointCost {
   }
 };
 
+// The relative pose T_ij = T_i * T_j^-1 of two pose blocks (angle-axis, translation of T_cw):
+// rotation q (w, x, y, z) and translation t.
+template <typename T>
+void relative_pose_of_blocks(const T* pi, const T* pj, T* q, T* t) {
+  T qi[4], qj[4];
+  ceres::AngleAxisToQuaternion(pi, qi);
+  ceres::AngleAxisToQuaternion(pj, qj);
+  const T qj_inv[4] = {qj[0], -qj[1], -qj[2], -qj[3]};
+  ceres::QuaternionProduct(qi, qj_inv, q);
+  T tj[3];
+  ceres::UnitQuaternionRotatePoint(q, pj + 3, tj);
+  for (int k = 0; k < 3; ++k) t[k] = pi[3 + k] - tj[k];
+}
+
 inline void pose_to_block(const SE3& T, double* block) {
   const Eigen::AngleAxisd aa(T.rotation());
   const Eigen::Vector3d w = aa.angle() * aa.axis();
