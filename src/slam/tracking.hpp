@@ -44,9 +44,9 @@ struct TrackingOptions {
   std::size_t max_keyframe_queue_weak = 6;  // ... while tracking is weak
   int weak_tracking_inliers = 100;          // below: keyframes and odometry use every depth point  // when lost: reference's neighbours and newest keyframes tried
   // Depth links between consecutive keyframes (KeyFrame::depth_link_*; local and global BA add them):
-  // ICP information per residual relative to independent 1 cm noise. Off by default: on the
-  // generated corridor it cuts the first 1610 frames' error 4x but spoils loop closing over
-  // two loops (docs/slam.md, later 2026-12-02 section); not tried on other worlds.
+  // ICP information per residual relative to independent 1 cm noise. Off by default: lab
+  // room 1.89 -> 0.88 cm, but half the frame rate, and the corridor with loop closing worse
+  // (0.805 -> 1.11 m, 28 frames lost): docs/slam.md, later 2026-12-02 section.
   bool depth_links = false;
   double depth_link_weight = 1.0;
 };
