@@ -45,8 +45,9 @@ struct TrackingOptions {
   int weak_tracking_inliers = 100;          // below: keyframes and odometry use every depth point  // when lost: reference's neighbours and newest keyframes tried
   // Depth links between consecutive keyframes (KeyFrame::depth_link_*; local and global BA add them):
   // ICP information per residual relative to independent 1 cm noise. Off by default: lab
-  // room 1.89 -> 0.88 cm, but half the frame rate, and the corridor with loop closing worse
-  // (0.805 -> 1.11 m, 28 frames lost): docs/slam.md, later 2026-12-02 section.
+  // room 1.89 -> 0.88 cm, but half the frame rate, and worse on the corridor with loop closing
+  // (0.805 -> 1.11 m, 28 frames lost) and the real kitchen (5.00 -> 6.24 cm): docs/slam.md,
+  // later 2026-12-02 section.
   bool depth_links = false;
   double depth_link_weight = 1.0;
 };
