@@ -30,6 +30,10 @@ constexpr int kMaxRepeatMs = 320;
 // A producer re-sends the same step to the same consumer at growing intervals, up to this
 // one: the copies it sent may still be queued at a busy consumer.
 constexpr int kMaxResendGapMs = 640;
+// An event consumer that still waits for a step this long after first asking for it, with
+// our counts covering it, lost an event (or our status): re-send. Longer than a round
+// trip, shorter than its first repeated report.
+constexpr int kEventWaitMs = 15;
 
 json merged(const LcmCodec& codec, const json& values, int64_t step) {
   json v = codec.zero();
@@ -66,6 +70,10 @@ struct MessageWrapper::Impl {
     int64_t resent_step = std::numeric_limits<int64_t>::min();
     Clock::time_point resent_at{};
     int resend_gap_ms = 0;
+    // Event-driven output: the step it was first seen waiting for although our status had
+    // covered it, and when (see on_status).
+    int64_t event_wait_step = std::numeric_limits<int64_t>::min();
+    Clock::time_point event_wait_since{};
   };
   struct Output {
     const Publication* pub;
@@ -109,8 +117,15 @@ struct MessageWrapper::Impl {
       for (const auto& m : sc.models) {
         if (m.name == cfg.name) continue;
         for (const auto& sub : m.subscribe)
-          if (sub.channel == p.channel)
-            out.consumers.push_back({m.name, &m, &sub, sub.expected_step(0) - (sub.history - 1)});
+          if (sub.channel == p.channel) {
+            // An event consumer holds the newest event at or before its step, so until it
+            // reports it needs every event from the first: the initial one at step -1 too,
+            // which a consumer that subscribed after it went out can only get re-sent (the
+            // initial event was trimmed before the slowest consumer's first report, and
+            // that consumer then waited for it for ever: 14 runs in 25 of the event test).
+            const int64_t first = p.events ? (p.initial ? -1 : 0) : sub.expected_step(0) - (sub.history - 1);
+            out.consumers.push_back({m.name, &m, &sub, first});
+          }
       }
       if (opt.recorder) out.consumers.push_back({kRecorderName, nullptr, nullptr, p.initial ? -1 : 0});
       if (opt.resume) {
@@ -199,9 +214,17 @@ struct MessageWrapper::Impl {
               c.awaits = std::min(c.awaits, step);  // answered when we complete it
             } else if (step >= status.step) {
               status_wanted = true;  // our last status did not cover it yet
-            } else if (Clock::now() - last_status >= std::chrono::milliseconds(opt.republish_ms)) {
-              // It covered it, a while ago, and the consumer still waits: an event or our
-              // status was lost (a request that crossed our status on the way is ignored).
+            } else if (c.event_wait_step != step) {
+              // Our last status covered it; this report may have crossed that status on
+              // the way. Answer with our counts, and re-send only if it keeps waiting.
+              c.event_wait_step = step;
+              c.event_wait_since = Clock::now();
+              status_wanted = true;
+            } else if (Clock::now() - c.event_wait_since >= std::chrono::milliseconds(kEventWaitMs)) {
+              // It still waits for the same step: an event or our status was lost. (Timing
+              // this from our own last status instead missed it for 17 s and more: a
+              // blocked producer and consumer wake each other with their statuses, so the
+              // report always came in just after our status and was taken for a crossing.)
               republish(out, c, step);
               status_wanted = true;
             }

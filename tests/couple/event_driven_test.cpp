@@ -9,12 +9,15 @@
 #include <fstream>
 #include <map>
 #include <set>
+#include <thread>
 
 #include "core/errors.hpp"
 #include "couple/event_tracker.hpp"
 #include "couple/launcher.hpp"
 #include "couple/lcm_codec.hpp"
 #include "couple/lcm_log.hpp"
+#include "couple/message_wrapper.hpp"
+#include "couple/model_function.hpp"
 #include "couple/model_config.hpp"
 #include "couple/status.hpp"
 #include "couple/time_manager.hpp"
@@ -271,4 +274,61 @@ TEST(EventDriven, OverTheMediatorNoModelReceivesAMessageBeforeItsGrant) {
   EXPECT_GE(granted["plant"], 14.99 - 1e-9);
   EXPECT_GE(granted["logger"], 14.99 - 1e-9);
   EXPECT_EQ(couple_test::left_over(d), "");
+}
+
+TEST(EventDriven, ConsumersThatStartAfterTheInitialEventStillGetIt) {
+  // Processes start in any order: here the controller runs first and publishes its initial
+  // event (step -1) and its first step before the plant and the logger subscribe, so both
+  // miss the event on the bus and must have it re-sent. Before the fix the controller had
+  // already dropped it (it kept events from its consumers' first regular step on) and the
+  // late consumers waited for it for ever (the mediator run above hung or failed in 14 of 25).
+  const Truth t = hand_written_loop();
+  const auto d = couple_test::temp_dir("ev_late");
+  const ScenarioConfig sc = load_scenario(write_scenario(d, "memq://ev_late"));
+  std::map<int64_t, std::pair<int64_t, int64_t>> state;  // step -> (x, held_step), heard on the bus
+  auto listener = make_transport("memq://ev_late");
+  const LcmCodec codec(sc.types, "ev.state_t");
+  listener->subscribe("STATE", [&](const std::string&, const uint8_t* p, std::size_t n) {
+    state.emplace(codec.read_int64(p, n, "step"), std::make_pair(codec.read_int64(p, n, "x"), codec.read_int64(p, n, "held_step")));
+  });
+  std::atomic<bool> stop{false};
+  std::atomic<int> running{0};
+  std::vector<std::unique_ptr<Transport>> transports;
+  std::vector<std::unique_ptr<MessageWrapper>> wrappers;
+  std::vector<std::thread> threads;
+  const auto cwd = std::filesystem::current_path();
+  std::filesystem::current_path(d);  // the models' commands are relative to the scenario
+  auto start = [&](const std::string& name) {
+    transports.push_back(make_transport("memq://ev_late"));
+    WrapperOptions wo;
+    wo.stop = &stop;
+    wo.linger_seconds = 1.0;
+    wrappers.push_back(std::make_unique<MessageWrapper>(sc, name, *transports.back(),
+                                                        load_model_function(sc.model(name), sc.types), wo));
+    ++running;
+    threads.emplace_back([&running, w = wrappers.back().get()] {
+      w->run();
+      --running;
+    });
+  };
+  start("controller");
+  // The controller computes step 0 from its initial STATE and then waits for the plant.
+  for (int i = 0; i < 1000 && wrappers[0]->steps_done() < 1; ++i) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  EXPECT_EQ(wrappers[0]->steps_done(), 1);
+  start("plant");
+  start("logger");
+  // Only a guard against hanging (the old behaviour): stop whatever still runs after 60 s.
+  for (int i = 0; i < 6000 && running > 0; ++i) listener->handle(10);
+  stop = true;
+  for (auto& th : threads) th.join();
+  listener->handle(0);
+  std::filesystem::current_path(cwd);
+  EXPECT_EQ(wrappers[1]->steps_done(), kSteps) << "the plant did not finish";
+  EXPECT_EQ(wrappers[2]->steps_done(), kSteps / 2) << "the logger did not finish";
+  ASSERT_EQ(state.size(), static_cast<std::size_t>(kSteps));
+  int bad = 0;
+  for (int64_t n = 0; n < kSteps; ++n)
+    if ((state[n].first != t.x[n] || state[n].second != t.held_step[n]) && bad++ < 3)
+      ADD_FAILURE() << "STATE step " << n << ": x " << state[n].first << " (truth " << t.x[n] << "), held "
+                    << state[n].second << " (truth " << t.held_step[n] << ")";
 }
