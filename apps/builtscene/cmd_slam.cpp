@@ -38,6 +38,9 @@ struct SlamOptions {
   std::filesystem::path vocabulary;
   bool no_relocalization = false;
   bool no_loop_closing = false;
+  bool depth_links = false;
+  double depth_link_weight = 1.0;
+  double motion_prior_cm = 0, motion_prior_deg = 0.3;
   SlamOgmOptions ogm;
   DescriptorOptions features;
 };
@@ -68,6 +71,13 @@ nlohmann::json run_slam(const SlamOptions& opt) {
   so.vocabulary = opt.vocabulary;
   so.relocalization = !opt.no_relocalization;
   so.loop_closing = !opt.no_loop_closing;
+  so.tracking.depth_links = opt.depth_links;
+  so.tracking.depth_link_weight = opt.depth_link_weight;
+  if (opt.motion_prior_cm > 0) {
+    so.tracking.motion_prior = true;
+    so.tracking.motion_prior_sigma_m = opt.motion_prior_cm / 100.0;
+    so.tracking.motion_prior_sigma_rad = opt.motion_prior_deg * M_PI / 180.0;
+  }
   opt.features.apply(so);
   so.saft_learning.synchronous = opt.sync_mapping;  // reproducible: learning inline too
   opt.features.check_outputs();
@@ -261,6 +271,16 @@ const bool registered_slam = register_command({
                    "When lost, only match the last reference keyframe (no place recognition)");
       cmd.add_flag("--no-loop-closing", opt->no_loop_closing,
                    "No loop detection and correction (the map drifts freely; for comparison)");
+      cmd.add_flag("--depth-links", opt->depth_links,
+                   "Experimental: align consecutive keyframes' depth images (ICP) and add the relative poses "
+                   "to bundle adjustment (docs/slam.md; about half the frame rate)");
+      cmd.add_option("--depth-link-weight", opt->depth_link_weight,
+                     "With --depth-links: scale of the links' information (1 = independent 1 cm depth noise)")
+          ->capture_default_str();
+      cmd.add_option("--motion-prior", opt->motion_prior_cm,
+                     "Experimental: hold each frame's pose to the motion model's prediction with this standard "
+                     "deviation in cm (0 = off; docs/slam.md)");
+      cmd.add_option("--motion-prior-deg", opt->motion_prior_deg, "... and this one in degrees")->capture_default_str();
       cmd.add_option("--ogm-out", opt->ogm.out,
                      "Output: occupancy grid built live from keyframes (MAP.yaml, .pgm, .state, .png)");
       cmd.add_option("--ogm-world", opt->ogm.world,

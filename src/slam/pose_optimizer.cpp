@@ -29,6 +29,33 @@ Intrinsics intrinsics_of(const FrameContext& ctx) {
   return {ctx.camera.fx, ctx.camera.fy, ctx.camera.cx, ctx.camera.cy, ctx.bf, ctx.disparity_sigma};
 }
 
+namespace {
+
+// r = [log(R R0^T) / sigma_rad; (t - R R0^T t0) / sigma_m]: the pose relative to the prior.
+struct PosePriorCost {
+  Eigen::Quaterniond q0;
+  Eigen::Vector3d t0;
+  double w_rot, w_trans;
+  template <typename T>
+  bool operator()(const T* pose, T* r) const {
+    T q[4], q0_inv[4] = {T(q0.w()), T(-q0.x()), T(-q0.y()), T(-q0.z())}, dq[4];
+    ceres::AngleAxisToQuaternion(pose, q);
+    ceres::QuaternionProduct(q, q0_inv, dq);
+    T aa[3];
+    ceres::QuaternionToAngleAxis(dq, aa);
+    const T t0_[3] = {T(t0.x()), T(t0.y()), T(t0.z())};
+    T rt0[3];
+    ceres::UnitQuaternionRotatePoint(dq, t0_, rt0);
+    for (int i = 0; i < 3; ++i) {
+      r[i] = aa[i] * T(w_rot);
+      r[3 + i] = (pose[3 + i] - rt0[i]) * T(w_trans);
+    }
+    return true;
+  }
+};
+
+}  // namespace
+
 PoseOptimizationResult optimize_pose(const SE3& T_cw_initial, const std::vector<Eigen::Vector3d>& points_w,
                                      const std::vector<Observation>& obs, const Intrinsics& K,
                                      const PoseOptimizerOptions& options) {
@@ -71,6 +98,13 @@ PoseOptimizationResult optimize_pose(const SE3& T_cw_initial, const std::vector<
       ++used;
     }
     if (used < options.min_inliers) break;
+    if (options.prior_T_cw) {
+      const auto& P = *options.prior_T_cw;
+      problem.AddResidualBlock(new ceres::AutoDiffCostFunction<PosePriorCost, 6, 6>(new PosePriorCost{
+                                   Eigen::Quaterniond(P.rotation()), P.translation(), 1.0 / options.prior_sigma_rad,
+                                   1.0 / options.prior_sigma_m}),
+                               nullptr, pose);
+    }
     ceres::Solver::Summary summary;
     ceres::Solve(solver_options, &problem, &summary);
 

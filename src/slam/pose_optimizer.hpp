@@ -4,6 +4,7 @@
 // threshold), four rounds of ten iterations after each of which every match is re-classified
 // inlier or outlier by the chi-square test at 95 %, as ORB-SLAM does; the robust loss is
 // dropped for the last two rounds, when the outliers are out.
+#include <optional>
 #include <vector>
 
 #include "core/se3.hpp"
@@ -17,6 +18,11 @@ struct PoseOptimizerOptions {
   int rounds = 4;
   int iterations = 10;
   int min_inliers = 10;  // fewer inliers stop the rounds early
+  // A prior on the pose (the motion model's prediction), as a 6-D term with these standard
+  // deviations: it holds the directions the matches leave weak (a slide and a turn towards
+  // far points look alike) and hardly moves the others.
+  std::optional<SE3> prior_T_cw;
+  double prior_sigma_m = 0.01, prior_sigma_rad = 0.005;
 };
 
 struct PoseOptimizationResult {

@@ -46,6 +46,7 @@ TrackingOutcome Tracker::track(Frame frame) {
   std::unique_lock lock(map_.mutex());
   bool ok = false;
   bool relocalized = false;
+  predicted_T_cw_.reset();
   if (state_ == TrackingState::kNotInitialized) {
     ok = keyframe_creation_ && initialize();
     out.state = state_;
@@ -59,7 +60,10 @@ TrackingOutcome Tracker::track(Frame frame) {
         ok = track_motion_model();
         out.used_motion_model = ok;
       }
-      if (!ok) ok = track_reference_keyframe();
+      if (!ok) {
+        predicted_T_cw_.reset();
+        ok = track_reference_keyframe();
+      }
     } else {
       current_.clear_matches();
       if (relocalization_hook_ && relocalization_hook_(current_)) {
@@ -321,16 +325,30 @@ int Tracker::discard_outliers() {
   return real;
 }
 
+PoseOptimizerOptions Tracker::pose_options() const {
+  PoseOptimizerOptions o;
+  if (opt_.motion_prior && predicted_T_cw_) {
+    o.prior_T_cw = predicted_T_cw_;
+    o.prior_sigma_m = opt_.motion_prior_sigma_m;
+    o.prior_sigma_rad = opt_.motion_prior_sigma_rad;
+  }
+  return o;
+}
+
 bool Tracker::track_motion_model() {
   current_.set_pose(velocity_ * last_.T_cw);
+  predicted_T_cw_ = current_.T_cw;
   current_.clear_matches();
   int n = search_by_projection(current_, last_, opt_.motion_model_radius);
   if (n < 20) {
     current_.clear_matches();
     n = search_by_projection(current_, last_, 2 * opt_.motion_model_radius);
   }
-  if (n < 20) return false;
-  optimize_frame_pose(current_);
+  if (n < 20) {
+    predicted_T_cw_.reset();
+    return false;
+  }
+  optimize_frame_pose(current_, pose_options());
   const int real = discard_outliers();
   // Localization mode: where the map is thin, matches to the last frame's depth points
   // (visual odometry) carry the pose, as in ORB-SLAM's only-tracking mode.
@@ -467,7 +485,7 @@ bool Tracker::track_local_map() {
                           p->predict_level(dist, ctx_->pyramid), static_cast<float>(view_cos)});
   }
   search_local_points(current_, candidates, opt_.local_map_radius);
-  optimize_frame_pose(current_);
+  optimize_frame_pose(current_, pose_options());
   local_map_counts_ = match_counts();
   inliers_ = odometry_inliers_ = 0;
   for (std::size_t i = 0; i < current_.points.size(); ++i) {

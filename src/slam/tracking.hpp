@@ -10,12 +10,14 @@
 #include <functional>
 #include <deque>
 #include <memory>
+#include <optional>
 #include <utility>
 #include <vector>
 
 #include "core/stage_timer.hpp"
 #include "slam/depth_odometry.hpp"
 #include "slam/frame.hpp"
+#include "slam/pose_optimizer.hpp"
 
 namespace builtscene::slam {
 
@@ -50,6 +52,10 @@ struct TrackingOptions {
   // later 2026-12-02 section.
   bool depth_links = false;
   double depth_link_weight = 1.0;
+  // Experimental: the motion model's prediction as a prior in the frame's pose optimization
+  // (PoseOptimizerOptions::prior_*), only when the pose came from the motion model.
+  bool motion_prior = false;
+  double motion_prior_sigma_m = 0.01, motion_prior_sigma_rad = 0.005;
 };
 
 enum class TrackingState { kNotInitialized, kOk, kLost };
@@ -142,6 +148,7 @@ class Tracker {
   Frame current_, last_;
   bool has_last_ = false;
   bool has_velocity_ = false;
+  std::optional<SE3> predicted_T_cw_;  // this frame's motion-model prediction (motion_prior)
   SE3 velocity_;  // T_cur_last
   std::deque<double> recent_speeds_;  // metres per frame of the last frames tracked by features
   SE3 odometry_prediction() const;
@@ -175,6 +182,7 @@ class Tracker {
   bool track_local_map();
   void update_local_map();
   int discard_outliers();  // returns matches to real map points
+  PoseOptimizerOptions pose_options() const;
   // Matches and inliers of the current frame, for TrackingOutcome's ratios.
   std::pair<int, int> match_counts() const;
   std::pair<int, int> initial_counts_{0, 0}, local_map_counts_{0, 0};

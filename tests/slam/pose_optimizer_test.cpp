@@ -101,5 +101,39 @@ TEST(PoseOptimizer, TooFewMatchesLeavesPoseUntouched) {
   EXPECT_TRUE(r.T_cw.matrix().isApprox(start.matrix()));
 }
 
+// The motion prior, closed form at the limit: points at infinity (mono matches 10 km away)
+// fix the rotation and say nothing about the translation, so the translation must come
+// from the prior exactly, and the rotation from the points even with a prior turned 1 deg.
+TEST(PoseOptimizer, APriorFixesWhatThePointsLeaveFreeAndNothingElse) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> ux(-1.0, 1.0);
+  const auto K = test::kinect();
+  const SE3 truth(so3_exp(Eigen::Vector3d(0.02, -0.1, 0.03)), Eigen::Vector3d(0.2, 0.05, -0.3));
+  std::vector<Eigen::Vector3d> pts;
+  std::vector<Observation> obs;
+  while (pts.size() < 100) {
+    const Eigen::Vector3d pc = Eigen::Vector3d(ux(rng), 0.75 * ux(rng), 1.5).normalized() * 1e4;
+    Observation o;
+    o.uv = test::project(K, pc);
+    o.inv_sigma2 = 1.0;
+    pts.push_back(truth.inverse() * pc);
+    obs.push_back(o);
+  }
+  const Eigen::Vector3d offset(0.04, -0.03, 0.05);
+  PoseOptimizerOptions o;
+  o.prior_T_cw = SE3(so3_exp(Eigen::Vector3d(0, M_PI / 180.0, 0)), Eigen::Vector3d::Zero()) * truth;
+  o.prior_T_cw = SE3(o.prior_T_cw->rotation(), truth.translation() + offset);
+  o.prior_sigma_m = 0.01;
+  o.prior_sigma_rad = 0.005;
+  const auto r = optimize_pose(SE3(truth.rotation(), truth.translation() + Eigen::Vector3d(0.1, 0.1, 0.1)), pts, obs,
+                               K, o);
+  ASSERT_TRUE(r.ok);
+  EXPECT_EQ(r.inliers, 100);
+  EXPECT_LT(test::rotation_error_deg(r.T_cw, truth), 0.01);
+  // T_cw * T_prior^-1 has no translation left: t = R R_prior^T t_prior.
+  const SE3 d = r.T_cw * o.prior_T_cw->inverse();
+  EXPECT_LT(d.translation().norm(), 1e-3) << d.translation().transpose();
+}
+
 }  // namespace
 }  // namespace builtscene::slam
