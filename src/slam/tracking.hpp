@@ -46,13 +46,13 @@ struct TrackingOptions {
   std::size_t max_keyframe_queue_weak = 6;  // ... while tracking is weak
   int weak_tracking_inliers = 100;          // below: keyframes and odometry use every depth point  // when lost: reference's neighbours and newest keyframes tried
   // Depth links between consecutive keyframes (KeyFrame::depth_link_*; local and global BA add them):
-  // ICP information per residual relative to independent 1 cm noise. Off by default: lab
-  // room 1.89 -> 0.88 cm, but half the frame rate, and worse on the corridor with loop closing
-  // (0.805 -> 1.11 m, 28 frames lost) and the real kitchen (5.00 -> 6.24 cm): docs/slam.md,
-  // later 2026-12-02 section.
+  // ICP information per residual relative to independent 1 cm noise, times the weight. With
+  // the motion prior below (weight 0.1) the corridor goes 0.805 -> 0.259 m and the lab room
+  // 1.89 -> 0.90 cm, but the real kitchen (depth not registered to colour) 4.99 -> 6.40 cm,
+  // so both are off by default: docs/slam.md, 2026-12-03 section.
   bool depth_links = false;
   double depth_link_weight = 1.0;
-  // Experimental: the motion model's prediction as a prior in the frame's pose optimization
+  // The motion model's prediction as a prior in the frame's pose optimization
   // (PoseOptimizerOptions::prior_*), only when the pose came from the motion model.
   bool motion_prior = false;
   double motion_prior_sigma_m = 0.01, motion_prior_sigma_rad = 0.005;
