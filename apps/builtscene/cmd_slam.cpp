@@ -63,6 +63,10 @@ slam::ModePlan make_mode_plan(const SlamOptions& opt) {
 }
 
 nlohmann::json run_slam(const SlamOptions& opt) {
+  for (const auto& [flag, value] : {std::pair{"--motion-prior", opt.motion_prior_cm},
+                                     std::pair{"--motion-prior-deg", opt.motion_prior_deg},
+                                     std::pair{"--depth-link-weight", opt.depth_link_weight}})
+    if (!std::isfinite(value)) throw InputError(std::string(flag) + ": not a number");
   const TumDataset data = TumDataset::open(opt.dataset, opt.camera);
   const auto camera_file = opt.camera.empty() ? opt.dataset / "camera.yaml" : opt.camera;
   slam::SystemOptions so;
@@ -276,11 +280,15 @@ const bool registered_slam = register_command({
                    "to bundle adjustment (docs/slam.md; about half the frame rate)");
       cmd.add_option("--depth-link-weight", opt->depth_link_weight,
                      "With --depth-links: scale of the links' information (1 = independent 1 cm depth noise)")
-          ->capture_default_str();
+          ->capture_default_str()
+          ->check(CLI::Range(1e-6, 1e6));
       cmd.add_option("--motion-prior", opt->motion_prior_cm,
                      "Experimental: hold each frame's pose to the motion model's prediction with this standard "
-                     "deviation in cm (0 = off; docs/slam.md)");
-      cmd.add_option("--motion-prior-deg", opt->motion_prior_deg, "... and this one in degrees")->capture_default_str();
+                     "deviation in cm (0 = off; docs/slam.md)")
+          ->check(CLI::Range(0.0, 100.0));
+      cmd.add_option("--motion-prior-deg", opt->motion_prior_deg, "... and this one in degrees")
+          ->capture_default_str()
+          ->check(CLI::Range(0.001, 45.0));
       cmd.add_option("--ogm-out", opt->ogm.out,
                      "Output: occupancy grid built live from keyframes (MAP.yaml, .pgm, .state, .png)");
       cmd.add_option("--ogm-world", opt->ogm.world,

@@ -125,6 +125,19 @@ TEST_F(SlamCommand, MissingDatasetIsUsageError) {
   EXPECT_EQ(r.exit_code, 2);
 }
 
+TEST_F(SlamCommand, BadPriorAndLinkValuesAreUsageErrorsNamingTheFlag) {
+  // Checked before the dataset is opened (this one does not exist): the flag is the fault.
+  const std::string base = "slam --dataset " + (dir / "nope").string() + " --trajectory " + (dir / "t.txt").string();
+  for (const auto& [args, flag] : {std::pair{" --motion-prior -1", "--motion-prior"},
+                                   std::pair{" --motion-prior 1 --motion-prior-deg nan", "--motion-prior-deg"},
+                                   std::pair{" --depth-links --depth-link-weight 0", "--depth-link-weight"}}) {
+    const auto r = run_cli(base + args);
+    EXPECT_EQ(r.exit_code, 2) << args;
+    EXPECT_NE(r.err.find(flag), std::string::npos) << args << ": " << r.err;
+    EXPECT_FALSE(fs::exists(dir / "t.txt"));
+  }
+}
+
 TEST_F(SlamCommand, AllBlankFramesNeverInitializeButDoNotCrash) {
   fs::create_directories(dir / "rgb");
   fs::create_directories(dir / "depth");
