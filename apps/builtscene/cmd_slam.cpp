@@ -277,7 +277,7 @@ const bool registered_slam = register_command({
                    "No loop detection and correction (the map drifts freely; for comparison)");
       cmd.add_flag("--depth-links", opt->depth_links,
                    "Experimental: align consecutive keyframes' depth images (ICP) and add the relative poses "
-                   "to bundle adjustment (off by default: better on generated worlds, worse on the real kitchen; docs/slam.md)");
+                   "to bundle adjustment (off by default: better on the corridor and lab room, worse on the office and the real kitchen; docs/slam.md)");
       cmd.add_option("--depth-link-weight", opt->depth_link_weight,
                      "With --depth-links: scale of the links' information (1 = independent 1 cm depth noise)")
           ->capture_default_str()

@@ -48,8 +48,8 @@ struct TrackingOptions {
   // Depth links between consecutive keyframes (KeyFrame::depth_link_*; local and global BA add them):
   // ICP information per residual relative to independent 1 cm noise, times the weight. With
   // the motion prior below (weight 0.1) the corridor goes 0.805 -> 0.259 m and the lab room
-  // 1.89 -> 0.90 cm, but the real kitchen (depth not registered to colour) 4.99 -> 6.40 cm,
-  // so both are off by default: docs/slam.md, 2026-12-03 section.
+  // 1.89 -> 0.90 cm, but the real kitchen (depth not registered to colour) 4.99 -> 6.40 cm
+  // and the office 12.3 -> 21.0 cm, so both are off by default: docs/slam.md, 2026-12-03.
   bool depth_links = false;
   double depth_link_weight = 1.0;
   // The motion model's prediction as a prior in the frame's pose optimization
