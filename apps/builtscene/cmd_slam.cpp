@@ -41,6 +41,7 @@ struct SlamOptions {
   bool depth_links = false;
   double depth_link_weight = 1.0;
   double motion_prior_cm = 0, motion_prior_deg = 0.3;
+  double depth_prior = 0;
   SlamOgmOptions ogm;
   DescriptorOptions features;
 };
@@ -65,7 +66,8 @@ slam::ModePlan make_mode_plan(const SlamOptions& opt) {
 nlohmann::json run_slam(const SlamOptions& opt) {
   for (const auto& [flag, value] : {std::pair{"--motion-prior", opt.motion_prior_cm},
                                      std::pair{"--motion-prior-deg", opt.motion_prior_deg},
-                                     std::pair{"--depth-link-weight", opt.depth_link_weight}})
+                                     std::pair{"--depth-link-weight", opt.depth_link_weight},
+                                     std::pair{"--depth-prior", opt.depth_prior}})
     if (!std::isfinite(value)) throw InputError(std::string(flag) + ": not a number");
   const TumDataset data = TumDataset::open(opt.dataset, opt.camera);
   const auto camera_file = opt.camera.empty() ? opt.dataset / "camera.yaml" : opt.camera;
@@ -77,6 +79,7 @@ nlohmann::json run_slam(const SlamOptions& opt) {
   so.loop_closing = !opt.no_loop_closing;
   so.tracking.depth_links = opt.depth_links;
   so.tracking.depth_link_weight = opt.depth_link_weight;
+  so.tracking.depth_prior_weight = opt.depth_prior;
   if (opt.motion_prior_cm > 0) {
     so.tracking.motion_prior = true;
     so.tracking.motion_prior_sigma_m = opt.motion_prior_cm / 100.0;
@@ -289,6 +292,10 @@ const bool registered_slam = register_command({
       cmd.add_option("--motion-prior-deg", opt->motion_prior_deg, "... and this one in degrees")
           ->capture_default_str()
           ->check(CLI::Range(0.001, 45.0));
+      cmd.add_option("--depth-prior", opt->depth_prior,
+                     "Experimental: align each frame's depth to the newest keyframe's (ICP) and hold the pose to "
+                     "it with the ICP's information times this weight (0 = off; docs/slam.md)")
+          ->check(CLI::Range(0.0, 1e6));
       cmd.add_option("--ogm-out", opt->ogm.out,
                      "Output: occupancy grid built live from keyframes (MAP.yaml, .pgm, .state, .png)");
       cmd.add_option("--ogm-world", opt->ogm.world,

@@ -31,11 +31,12 @@ Intrinsics intrinsics_of(const FrameContext& ctx) {
 
 namespace {
 
-// r = [log(R R0^T) / sigma_rad; (t - R R0^T t0) / sigma_m]: the pose relative to the prior.
+// r = S [log(R R0^T); t - R R0^T t0]: the pose relative to the prior, S its square-root
+// information (diag(1/sigma_rad x3, 1/sigma_m x3) for the motion prior).
 struct PosePriorCost {
   Eigen::Quaterniond q0;
   Eigen::Vector3d t0;
-  double w_rot, w_trans;
+  Eigen::Matrix<double, 6, 6> S;
   template <typename T>
   bool operator()(const T* pose, T* r) const {
     T q[4], q0_inv[4] = {T(q0.w()), T(-q0.x()), T(-q0.y()), T(-q0.z())}, dq[4];
@@ -46,9 +47,14 @@ struct PosePriorCost {
     const T t0_[3] = {T(t0.x()), T(t0.y()), T(t0.z())};
     T rt0[3];
     ceres::UnitQuaternionRotatePoint(dq, t0_, rt0);
+    T e[6];
     for (int i = 0; i < 3; ++i) {
-      r[i] = aa[i] * T(w_rot);
-      r[3 + i] = (pose[3 + i] - rt0[i]) * T(w_trans);
+      e[i] = aa[i];
+      e[3 + i] = pose[3 + i] - rt0[i];
+    }
+    for (int i = 0; i < 6; ++i) {
+      r[i] = T(0);
+      for (int j = 0; j < 6; ++j) r[i] += T(S(i, j)) * e[j];
     }
     return true;
   }
@@ -66,6 +72,13 @@ PoseOptimizationResult optimize_pose(const SE3& T_cw_initial, const std::vector<
   result.inliers = static_cast<int>(n);
   if (static_cast<int>(n) < options.min_inliers) return result;
   result.ok = true;
+
+  std::vector<PosePrior> priors = options.priors;
+  if (options.prior_T_cw) {
+    Eigen::Matrix<double, 6, 1> d;
+    d << Eigen::Vector3d::Constant(1.0 / options.prior_sigma_rad), Eigen::Vector3d::Constant(1.0 / options.prior_sigma_m);
+    priors.push_back({*options.prior_T_cw, d.asDiagonal()});
+  }
 
   double pose[6];
   detail::pose_to_block(T_cw_initial, pose);
@@ -98,11 +111,9 @@ PoseOptimizationResult optimize_pose(const SE3& T_cw_initial, const std::vector<
       ++used;
     }
     if (used < options.min_inliers) break;
-    if (options.prior_T_cw) {
-      const auto& P = *options.prior_T_cw;
+    for (const auto& P : priors) {
       problem.AddResidualBlock(new ceres::AutoDiffCostFunction<PosePriorCost, 6, 6>(new PosePriorCost{
-                                   Eigen::Quaterniond(P.rotation()), P.translation(), 1.0 / options.prior_sigma_rad,
-                                   1.0 / options.prior_sigma_m}),
+                                   Eigen::Quaterniond(P.T_cw.rotation()), P.T_cw.translation(), P.sqrt_information}),
                                nullptr, pose);
     }
     ceres::Solver::Summary summary;

@@ -14,6 +14,14 @@ namespace builtscene::slam {
 
 class Frame;
 
+// A Gaussian prior on the pose with a full information matrix: residual
+// sqrt_information * [log(R R0^T); t - R R0^T t0], the left perturbation of T_cw relative to
+// T_cw0 (rotation first). Directions the information leaves at zero are not held.
+struct PosePrior {
+  SE3 T_cw;
+  Eigen::Matrix<double, 6, 6> sqrt_information;
+};
+
 struct PoseOptimizerOptions {
   int rounds = 4;
   int iterations = 10;
@@ -23,6 +31,9 @@ struct PoseOptimizerOptions {
   // far points look alike) and hardly moves the others.
   std::optional<SE3> prior_T_cw;
   double prior_sigma_m = 0.01, prior_sigma_rad = 0.005;
+  // Further priors, added to the problem with the one above (the depth alignment to the last
+  // keyframe: TrackingOptions::depth_prior_weight).
+  std::vector<PosePrior> priors;
 };
 
 struct PoseOptimizationResult {

@@ -6,6 +6,8 @@
 #include <tuple>
 #include <unordered_map>
 
+#include <Eigen/Eigenvalues>
+
 #include "core/so3.hpp"
 #include "slam/icp_with_motion_prior.hpp"
 #include "slam/key_frame.hpp"
@@ -222,6 +224,37 @@ void Tracker::link_by_depth(KeyFrame& kf, const KeyFrame& prev) const {
   kf.depth_link_to = std::const_pointer_cast<KeyFrame>(prev.shared_from_this());
   kf.depth_link_T = *T;
   kf.depth_link_information = w * info;
+}
+
+std::optional<PosePrior> Tracker::depth_prior() const {
+  if (!(opt_.depth_prior_weight > 0) || depth_.empty() || last_kf_depth_.empty()) return std::nullopt;
+  const auto kf = last_kf_.lock();
+  if (!kf || kf->bad) return std::nullopt;
+  const auto start = std::chrono::steady_clock::now();
+  const Intrinsics K = intrinsics_of(*ctx_);
+  IcpWithPriorOptions o;
+  o.stride = 8;
+  o.iterations = 15;
+  o.min_correspondences = 100;
+  o.max_gap_m = 0.3;
+  o.prior_sigma_m = 0.05;  // as the keyframe links: the depth decides where it can
+  o.prior_sigma_rad = 0.02;
+  const SE3 T_kf_cw = kf->pose();
+  const SE3 predicted = current_.T_cw * T_kf_cw.inverse();
+  Eigen::Matrix<double, 6, 6> info;  // (translation, rotation) of the left perturbation
+  const auto T = icp_with_motion_prior(last_kf_depth_, depth_, K.fx, K.fy, K.cx, K.cy, predicted, o, &info);
+  if (timer_) timer_->add("depth_prior", ms_since(start));
+  if (!T) return std::nullopt;
+  const SE3 d = *T * predicted.inverse();
+  if (d.translation().norm() > 0.5 || so3_log(d.rotation()).norm() > 8.0 * M_PI / 180.0) return std::nullopt;
+  // PosePrior wants (rotation, translation) and the square root of the information.
+  Eigen::Matrix<double, 6, 6> H;
+  H << info.block<3, 3>(3, 3), info.block<3, 3>(3, 0), info.block<3, 3>(0, 3), info.block<3, 3>(0, 0);
+  H = 0.5 * (H + H.transpose()) * opt_.depth_prior_weight;
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>> es(H);
+  if (es.info() != Eigen::Success) return std::nullopt;
+  const Eigen::Matrix<double, 6, 1> s = es.eigenvalues().cwiseMax(0.0).cwiseSqrt();
+  return PosePrior{*T * T_kf_cw, s.asDiagonal() * es.eigenvectors().transpose()};
 }
 
 void Tracker::start_lost() {
@@ -485,7 +518,9 @@ bool Tracker::track_local_map() {
                           p->predict_level(dist, ctx_->pyramid), static_cast<float>(view_cos)});
   }
   search_local_points(current_, candidates, opt_.local_map_radius);
-  optimize_frame_pose(current_, pose_options());
+  PoseOptimizerOptions po = pose_options();
+  if (auto prior = depth_prior()) po.priors.push_back(*prior);
+  optimize_frame_pose(current_, po);
   local_map_counts_ = match_counts();
   inliers_ = odometry_inliers_ = 0;
   for (std::size_t i = 0; i < current_.points.size(); ++i) {
@@ -566,8 +601,9 @@ void Tracker::create_new_keyframe() {
     ++n;
     if (z > ctx_->th_depth && n > wanted) break;
   }
-  if (opt_.depth_links && !depth_.empty()) {
-    if (auto prev = last_kf_.lock(); prev && !prev->bad && !last_kf_depth_.empty()) link_by_depth(*kf, *prev);
+  if ((opt_.depth_links || opt_.depth_prior_weight > 0) && !depth_.empty()) {
+    if (auto prev = last_kf_.lock(); opt_.depth_links && prev && !prev->bad && !last_kf_depth_.empty())
+      link_by_depth(*kf, *prev);
     last_kf_depth_ = depth_;
     last_kf_ = kf;
   }

@@ -56,6 +56,11 @@ struct TrackingOptions {
   // (PoseOptimizerOptions::prior_*), only when the pose came from the motion model.
   bool motion_prior = false;
   double motion_prior_sigma_m = 0.01, motion_prior_sigma_rad = 0.005;
+  // Every frame's depth aligned to the newest keyframe's (ICP from the motion model's pose)
+  // as a prior with the ICP's information times this weight in local-map tracking's pose
+  // optimization (0 = off): where a few far features leave a slide and a turn alike, the
+  // walls' depth tells them apart. Experimental, docs/slam.md.
+  double depth_prior_weight = 0.0;
 };
 
 enum class TrackingState { kNotInitialized, kOk, kLost };
@@ -171,6 +176,7 @@ class Tracker {
   long depth_odometry_frames_ = 0;
   bool track_depth_odometry();  // the last frame's pose moved by RGB-D odometry
   void link_by_depth(KeyFrame& kf, const KeyFrame& prev) const;  // KeyFrame::depth_link_*
+  std::optional<PosePrior> depth_prior() const;                    // depth_prior_weight
   cv::Mat last_kf_depth_;        // the newest keyframe's depth image and the keyframe
   std::weak_ptr<KeyFrame> last_kf_;
 

@@ -135,5 +135,42 @@ TEST(PoseOptimizer, APriorFixesWhatThePointsLeaveFreeAndNothingElse) {
   EXPECT_LT(d.translation().norm(), 1e-3) << d.translation().transpose();
 }
 
+// Full-information priors (TrackingOptions::depth_prior_weight), closed form: points at
+// infinity fix the rotation; one prior holds only t_x + t_y and t_z, another only t_x - t_y,
+// each at a different translation, so the answer takes each combination from its own prior
+// and the matrix's off-diagonal terms decide it.
+TEST(PoseOptimizer, FullInformationPriorsHoldOnlyTheirDirections) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> ux(-1.0, 1.0);
+  const auto K = test::kinect();
+  const SE3 truth(so3_exp(Eigen::Vector3d(-0.03, 0.2, 0.01)), Eigen::Vector3d(0.1, -0.2, 0.4));
+  std::vector<Eigen::Vector3d> pts;
+  std::vector<Observation> obs;
+  while (pts.size() < 60) {
+    const Eigen::Vector3d pc = Eigen::Vector3d(ux(rng), 0.75 * ux(rng), 1.5).normalized() * 1e4;
+    Observation o;
+    o.uv = test::project(K, pc);
+    o.inv_sigma2 = 1.0;
+    pts.push_back(truth.inverse() * pc);
+    obs.push_back(o);
+  }
+  const Eigen::Vector3d a(0.30, 0.10, -0.20), b(-0.10, 0.25, 0.70);  // the two priors' translations
+  PosePrior pa{SE3(truth.rotation(), a), Eigen::Matrix<double, 6, 6>::Zero()};
+  PosePrior pb{SE3(truth.rotation(), b), Eigen::Matrix<double, 6, 6>::Zero()};
+  pa.sqrt_information(0, 3) = pa.sqrt_information(0, 4) = 100.0;  // t_x + t_y
+  pa.sqrt_information(1, 5) = 100.0;                              // t_z
+  pb.sqrt_information(0, 3) = 100.0;                              // t_x - t_y
+  pb.sqrt_information(0, 4) = -100.0;
+  PoseOptimizerOptions o;
+  o.priors = {pa, pb};
+  const auto r = optimize_pose(SE3(truth.rotation(), Eigen::Vector3d::Zero()), pts, obs, K, o);
+  ASSERT_TRUE(r.ok);
+  EXPECT_LT(test::rotation_error_deg(r.T_cw, truth), 0.01);
+  const Eigen::Vector3d t = r.T_cw.translation();
+  EXPECT_NEAR(t.x() + t.y(), a.x() + a.y(), 1e-4);
+  EXPECT_NEAR(t.x() - t.y(), b.x() - b.y(), 1e-4);
+  EXPECT_NEAR(t.z(), a.z(), 1e-4);
+}
+
 }  // namespace
 }  // namespace builtscene::slam

@@ -130,7 +130,9 @@ TEST_F(SlamCommand, BadPriorAndLinkValuesAreUsageErrorsNamingTheFlag) {
   const std::string base = "slam --dataset " + (dir / "nope").string() + " --trajectory " + (dir / "t.txt").string();
   for (const auto& [args, flag] : {std::pair{" --motion-prior -1", "--motion-prior"},
                                    std::pair{" --motion-prior 1 --motion-prior-deg nan", "--motion-prior-deg"},
-                                   std::pair{" --depth-links --depth-link-weight 0", "--depth-link-weight"}}) {
+                                   std::pair{" --depth-links --depth-link-weight 0", "--depth-link-weight"},
+                                   std::pair{" --depth-prior -0.5", "--depth-prior"},
+                                   std::pair{" --depth-prior nan", "--depth-prior"}}) {
     const auto r = run_cli(base + args);
     EXPECT_EQ(r.exit_code, 2) << args;
     EXPECT_NE(r.err.find(flag), std::string::npos) << args << ": " << r.err;
