@@ -33,10 +33,12 @@ constexpr std::uint32_t tag(const char (&s)[5]) {
          static_cast<std::uint32_t>(static_cast<unsigned char>(s[3])) << 24;
 }
 constexpr std::uint32_t kContextTag = tag("CTXT"), kKeyFramesTag = tag("KFRM"), kPointsTag = tag("MPTS"),
-                        kCovisibilityTag = tag("COVI"), kLoopEdgesTag = tag("LOOP");
-// Version 2 added the loop edges; version 1 files (no loop closing yet) still load.
-constexpr std::uint32_t kSectionOrder[] = {kContextTag, kKeyFramesTag, kPointsTag, kCovisibilityTag, kLoopEdgesTag};
-constexpr std::size_t section_count(std::uint32_t version) { return version >= 2 ? 5 : 4; }
+                        kCovisibilityTag = tag("COVI"), kLoopEdgesTag = tag("LOOP"), kDepthLinksTag = tag("DLNK");
+// Version 2 added the loop edges, version 3 the depth links; older files still load.
+constexpr std::uint32_t kSectionOrder[] = {kContextTag,      kKeyFramesTag, kPointsTag,
+                                           kCovisibilityTag, kLoopEdgesTag, kDepthLinksTag};
+constexpr std::size_t section_count(std::uint32_t version) { return version >= 3 ? 6 : version == 2 ? 5 : 4; }
+constexpr std::size_t kDepthLinkBytes = 16 + 7 * 8 + 21 * 8;
 constexpr std::size_t kKeypointBytes = 7 * 4;
 
 std::string tag_name(std::uint32_t t) {
@@ -382,8 +384,25 @@ std::vector<std::uint8_t> encode_map(const Map& map, const FrameContext& ctx, st
     lw.put(static_cast<std::int64_t>(b));
   }
 
-  const std::size_t body_size =
-      5 * 16 + context.bytes.size() + kfw.bytes.size() + pw.bytes.size() + cw.bytes.size() + lw.bytes.size();
+  // Depth links (TrackingOptions::depth_links): one per keyframe at most, to an older one;
+  // the information matrix is symmetric, so only its upper triangle is stored.
+  Writer dw;
+  std::vector<const KeyFrame*> linked;
+  for (const auto& kf : keyframes) {
+    const auto to = kf->depth_link_to.lock();
+    if (to && !to->bad && saved_kfs.count(to.get())) linked.push_back(kf.get());
+  }
+  dw.put(static_cast<std::uint32_t>(linked.size()));
+  for (const KeyFrame* kf : linked) {  // keyframes() is in id order
+    dw.put(static_cast<std::int64_t>(kf->id));
+    dw.put(static_cast<std::int64_t>(kf->depth_link_to.lock()->id));
+    dw.pose(kf->depth_link_T);
+    for (int r = 0; r < 6; ++r)
+      for (int c = r; c < 6; ++c) dw.put(kf->depth_link_information(r, c));
+  }
+
+  const std::size_t body_size = 6 * 16 + context.bytes.size() + kfw.bytes.size() + pw.bytes.size() +
+                                cw.bytes.size() + lw.bytes.size() + dw.bytes.size();
   Writer out;
   out.bytes.reserve(kHeaderSize + body_size);
   out.raw(kMagic, sizeof(kMagic));
@@ -400,6 +419,7 @@ std::vector<std::uint8_t> encode_map(const Map& map, const FrameContext& ctx, st
   section(out, kPointsTag, pw);
   section(out, kCovisibilityTag, cw);
   section(out, kLoopEdgesTag, lw);
+  section(out, kDepthLinksTag, dw);
   return std::move(out.bytes);
 }
 
@@ -628,9 +648,41 @@ MapFileInfo decode_map(const std::uint8_t* data, std::size_t size, const std::st
     }
     lr.expect_end();
   }
+  struct DepthLink {
+    KeyFrame* from;
+    KeyFrame* to;
+    SE3 T;
+    Eigen::Matrix<double, 6, 6> information;
+  };
+  std::vector<DepthLink> depth_links;
+  if (version >= 3) {
+    Reader dr(spans[5].data, spans[5].size, name, "DLNK");
+    const std::size_t n_links = dr.count(kDepthLinkBytes, "depth link count");
+    std::unordered_set<long> linked;
+    for (std::size_t e = 0; e < n_links; ++e) {
+      const long a = dr.get<std::int64_t>("depth link keyframe");
+      const long b = dr.get<std::int64_t>("depth link target");
+      KeyFrame* ka = lookup(kf_by_id, a, dr, "depth link");
+      KeyFrame* kb = lookup(kf_by_id, b, dr, fmt::format("keyframe {}'s depth link", a));
+      if (ka == kb) dr.fail(fmt::format("keyframe {} has a depth link to itself", a));
+      if (!linked.insert(a).second) dr.fail(fmt::format("keyframe {} has two depth links", a));
+      DepthLink link{ka, kb, dr.pose("depth link pose"), Eigen::Matrix<double, 6, 6>::Zero()};
+      for (int r = 0; r < 6; ++r)
+        for (int c = r; c < 6; ++c) link.information(r, c) = link.information(c, r) = dr.finite("depth link information");
+      if ((link.information.diagonal().array() < 0).any())
+        dr.fail(fmt::format("keyframe {}: depth link information has a negative diagonal entry", a));
+      depth_links.push_back(link);
+    }
+    dr.expect_end();
+  }
   for (const auto& [a, b] : loop_edges) {
     a->loop_edges.insert(b);
     b->loop_edges.insert(a);
+  }
+  for (const auto& l : depth_links) {
+    l.from->depth_link_to = l.to->shared_from_this();
+    l.from->depth_link_T = l.T;
+    l.from->depth_link_information = l.information;
   }
   for (auto& kf : kfs) {
     // Rebuild the weight order through the one place that defines it.

@@ -14,9 +14,13 @@
 //   section u32 tag | u32 CRC-32 of the payload | u64 payload size | payload
 // Sections, in this order: "CTXT" (camera, pyramid, descriptor kind, id counters),
 // "KFRM" (keyframes), "MPTS" (map points), "COVI" (covisibility edges), "LOOP" (loop edges:
-// u32 count, then pairs of i64 keyframe ids, smaller id first; since version 2). Records are
-// sorted by id and maps by key, so save -> load -> save gives identical bytes. Version 1
-// files (without LOOP) are read as maps without loop edges; newer versions are rejected.
+// u32 count, then pairs of i64 keyframe ids, smaller id first; since version 2), "DLNK"
+// (depth links of `slam --depth-links`: u32 count, then per link i64 keyframe id, i64 id of
+// the keyframe it is aligned to, the relative pose as quaternion w x y z and translation,
+// and the upper triangle of its 6 x 6 information row by row, 21 doubles; since version 3).
+// Records are sorted by id and maps by key, so save -> load -> save gives identical bytes.
+// Version 1 files (without LOOP) are read as maps without loop edges, version 2 files
+// (without DLNK) as maps without depth links; newer versions are rejected.
 //
 // Reading validates before it builds: checksums, sizes, every id reference and index; any
 // problem is an InputError "FILE: what is wrong" and the target map is left untouched.
@@ -33,7 +37,7 @@ namespace builtscene::slam {
 
 class Map;
 
-inline constexpr std::uint32_t kMapFileVersion = 2;
+inline constexpr std::uint32_t kMapFileVersion = 3;
 
 struct MapFileInfo {
   std::uint32_t version = 0;

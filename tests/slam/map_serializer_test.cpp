@@ -1,9 +1,11 @@
 // Saved maps: the decoded map equals the one encoded (checked field by field against the
 // built map, not against the decoder's own output), save -> load -> save is byte-identical,
 // and every kind of damaged file is rejected with an InputError naming the file, never a crash.
+#include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <random>
 #include <set>
 
@@ -42,6 +44,50 @@ std::string decode_error(const std::vector<std::uint8_t>& bytes, const std::shar
 
 void set_u32(std::vector<std::uint8_t>& b, std::size_t at, std::uint32_t v) { std::memcpy(b.data() + at, &v, 4); }
 void fix_header_crc(std::vector<std::uint8_t>& b) { set_u32(b, 40, map_file_crc32(b.data(), 40)); }
+
+// A file taken apart into its sections (tag, payload) and put together again with a given
+// version, recomputing every size and checksum: how older versions and damaged sections are
+// made from a fresh file.
+struct Section {
+  std::string tag;
+  std::vector<std::uint8_t> payload;
+};
+std::vector<Section> split_sections(const std::vector<std::uint8_t>& b) {
+  std::vector<Section> out;
+  for (std::size_t pos = 48; pos + 16 <= b.size();) {
+    std::uint64_t n;
+    std::memcpy(&n, b.data() + pos + 8, 8);
+    out.push_back({std::string(reinterpret_cast<const char*>(b.data() + pos), 4),
+                   std::vector<std::uint8_t>(b.begin() + static_cast<long>(pos + 16), b.begin() + static_cast<long>(pos + 16 + n))});
+    pos += 16 + n;
+  }
+  return out;
+}
+std::vector<std::uint8_t> join_sections(const std::vector<std::uint8_t>& original, std::uint32_t version,
+                                        const std::vector<Section>& sections) {
+  std::vector<std::uint8_t> b(original.begin(), original.begin() + 48);
+  for (const auto& s : sections) {
+    const std::size_t at = b.size();
+    b.resize(at + 16);
+    std::memcpy(b.data() + at, s.tag.data(), 4);
+    set_u32(b, at + 4, map_file_crc32(s.payload.data(), s.payload.size()));
+    const std::uint64_t n = s.payload.size();
+    std::memcpy(b.data() + at + 8, &n, 8);
+    b.insert(b.end(), s.payload.begin(), s.payload.end());
+  }
+  set_u32(b, 8, version);
+  set_u32(b, 24, static_cast<std::uint32_t>(sections.size()));
+  const std::uint64_t body = b.size() - 48;
+  std::memcpy(b.data() + 32, &body, 8);
+  fix_header_crc(b);
+  return b;
+}
+template <typename T>
+void append(std::vector<std::uint8_t>& b, T v) {
+  const std::size_t at = b.size();
+  b.resize(at + sizeof(T));
+  std::memcpy(b.data() + at, &v, sizeof(T));
+}
 
 TEST(MapSerializer, DecodedMapEqualsTheBuiltOne) {
   Built a;
@@ -167,11 +213,11 @@ TEST(MapSerializer, EveryFlippedByteIsDetected) {
 TEST(MapSerializer, WrongVersionForeignFilesAndOtherByteOrder) {
   Built a(3, 30);
   Map target;
-  auto v3 = a.bytes;
-  set_u32(v3, 8, 3);
-  fix_header_crc(v3);
-  EXPECT_NE(decode_error(v3, a.ctx, target).find("version 3 is not supported"), std::string::npos)
-      << decode_error(v3, a.ctx, target);
+  auto next = a.bytes;  // a version from a future build
+  set_u32(next, 8, kMapFileVersion + 1);
+  fix_header_crc(next);
+  const std::string expected = "version " + std::to_string(kMapFileVersion + 1) + " is not supported";
+  EXPECT_NE(decode_error(next, a.ctx, target).find(expected), std::string::npos) << decode_error(next, a.ctx, target);
   auto v0 = a.bytes;
   set_u32(v0, 8, 0);
   fix_header_crc(v0);
@@ -286,65 +332,132 @@ TEST(MapSerializer, OdometryTreeLinksRoundTrip) {
   EXPECT_EQ(encode_map(loaded, *a.ctx, 0), a.bytes);
 }
 
-// A version-1 file (no LOOP section) is the same map without loop edges.
-TEST(MapSerializer, VersionOneFilesStillLoad) {
+// Older files are the same map without what their version lacked: version 1 had no LOOP
+// section (loop edges), version 2 no DLNK section (depth links). Saved again, they are
+// today's version.
+TEST(MapSerializer, OlderVersionsStillLoad) {
   Built a(6, 50);
-  // The version-2 bytes of a map without loop edges end with an empty LOOP section: 16 bytes
-  // of section header and a zero count. Without them, and with the old header, they are
-  // what version 1 wrote.
-  auto v1 = a.bytes;
-  ASSERT_GT(v1.size(), 48u + 20u);
-  std::uint32_t tag;
-  std::memcpy(&tag, v1.data() + v1.size() - 20, 4);
-  ASSERT_EQ(std::string(reinterpret_cast<const char*>(&tag), 4), "LOOP");
-  v1.resize(v1.size() - 20);
-  set_u32(v1, 8, 1);
-  set_u32(v1, 24, 4);
-  const std::uint64_t body = v1.size() - 48;
-  std::memcpy(v1.data() + 32, &body, 8);
-  fix_header_crc(v1);
-  Map loaded;
-  ASSERT_EQ(decode_error(v1, a.ctx, loaded), "");
-  std::lock_guard lb(loaded.mutex());
-  EXPECT_EQ(loaded.keyframe_count(), 6u);
-  EXPECT_EQ(encode_map(loaded, *a.ctx, 0), a.bytes);  // saved again as version 2
-  // A version-2 header over version-1 sections is not accepted.
-  auto mixed = v1;
-  set_u32(mixed, 8, 2);
-  fix_header_crc(mixed);
-  Map target;
-  EXPECT_NE(decode_error(mixed, a.ctx, target), "");
+  const auto sections = split_sections(a.bytes);
+  ASSERT_EQ(sections.size(), 6u);
+  ASSERT_EQ(sections[4].tag, "LOOP");
+  ASSERT_EQ(sections[5].tag, "DLNK");
+  for (std::uint32_t version : {1u, 2u}) {
+    const auto old = join_sections(a.bytes, version, std::vector<Section>(sections.begin(), sections.begin() + 3 + version));
+    Map loaded;
+    ASSERT_EQ(decode_error(old, a.ctx, loaded), "") << "version " << version;
+    std::lock_guard lb(loaded.mutex());
+    EXPECT_EQ(loaded.keyframe_count(), 6u);
+    EXPECT_EQ(encode_map(loaded, *a.ctx, 0), a.bytes) << "version " << version;
+    // A newer header over an older version's sections is not accepted.
+    auto mixed = old;
+    set_u32(mixed, 8, version + 1);
+    fix_header_crc(mixed);
+    Map target;
+    EXPECT_NE(decode_error(mixed, a.ctx, target), "") << "version " << version;
+  }
 }
 
 TEST(MapSerializer, BadLoopEdgesAreRejected) {
   Built a(6, 50);
   auto with_loop = [&](std::int64_t x, std::int64_t y, int copies) {
-    auto b = a.bytes;
-    b.resize(b.size() - 4);  // drop the zero count
-    const std::uint32_t n = static_cast<std::uint32_t>(copies);
-    std::vector<std::uint8_t> payload(4);
-    std::memcpy(payload.data(), &n, 4);
+    auto sections = split_sections(a.bytes);
+    auto& payload = sections[4].payload;
+    payload.clear();
+    append(payload, static_cast<std::uint32_t>(copies));
     for (int c = 0; c < copies; ++c) {
-      const std::size_t at = payload.size();
-      payload.resize(at + 16);
-      std::memcpy(payload.data() + at, &x, 8);
-      std::memcpy(payload.data() + at + 8, &y, 8);
+      append(payload, x);
+      append(payload, y);
     }
-    b.insert(b.end(), payload.begin(), payload.end());
-    const std::size_t section = b.size() - payload.size() - 16;
-    set_u32(b, section + 4, map_file_crc32(payload.data(), payload.size()));
-    const std::uint64_t size = payload.size();
-    std::memcpy(b.data() + section + 8, &size, 8);
-    const std::uint64_t body = b.size() - 48;
-    std::memcpy(b.data() + 32, &body, 8);
-    fix_header_crc(b);
-    return b;
+    return join_sections(a.bytes, kMapFileVersion, sections);
   };
   Map target;
   EXPECT_EQ(decode_error(with_loop(1, 4, 1), a.ctx, target), "");
   EXPECT_NE(decode_error(with_loop(3, 3, 1), a.ctx, target).find("loop edge to itself"), std::string::npos);
   EXPECT_NE(decode_error(with_loop(1, 4, 2), a.ctx, target).find("appears twice"), std::string::npos);
   EXPECT_NE(decode_error(with_loop(1, 99, 1), a.ctx, target), "");
+}
+
+// Depth links (version 3): the relative pose and the full information come back exactly,
+// links to keyframes not in the map are not written, and saving again gives the same bytes.
+TEST(MapSerializer, DepthLinksRoundTrip) {
+  Built a(8, 60);
+  std::mt19937 rng(7);
+  std::normal_distribution<double> g;
+  std::map<long, std::pair<long, Eigen::Matrix<double, 6, 6>>> expected;
+  {
+    std::lock_guard lock(a.map.mutex());
+    const auto kfs = a.map.keyframes();
+    for (auto [i, j] : {std::pair{3, 2}, std::pair{6, 1}}) {
+      Eigen::Matrix<double, 6, 6> J;
+      for (int r = 0; r < 6; ++r)
+        for (int c = 0; c < 6; ++c) J(r, c) = g(rng);
+      const Eigen::Matrix<double, 6, 6> JtJ = 1e4 * J.transpose() * J;
+      const Eigen::Matrix<double, 6, 6> info = 0.5 * (JtJ + JtJ.transpose());  // exactly symmetric, positive definite
+      auto& kf = *kfs[static_cast<std::size_t>(i)];
+      kf.depth_link_to = kfs[static_cast<std::size_t>(j)];
+      kf.depth_link_T = SE3(Eigen::Quaterniond(Eigen::AngleAxisd(0.1 * i, Eigen::Vector3d(g(rng), g(rng), g(rng)).normalized())),
+                            Eigen::Vector3d(g(rng), g(rng), g(rng)));
+      kf.depth_link_information = info;
+      expected[kf.id] = {kfs[static_cast<std::size_t>(j)]->id, info};
+    }
+    // Links whose target is not in the map (culled, still referenced elsewhere) or gone
+    // (freed) are not saved.
+    const auto culled = std::make_shared<KeyFrame>(99, Frame(99, 9.9, kfs[0]->f));
+    kfs[5]->depth_link_to = culled;
+    kfs[7]->depth_link_to = std::make_shared<KeyFrame>(98, Frame(98, 9.8, kfs[0]->f));
+    a.bytes = encode_map(a.map, *a.ctx, 0);
+  }
+  Map loaded;
+  std::lock_guard la(a.map.mutex());
+  std::lock_guard lb(loaded.mutex());
+  decode_map(a.bytes.data(), a.bytes.size(), "mem", loaded, a.ctx);
+  const auto kfs = loaded.keyframes(), built = a.map.keyframes();
+  ASSERT_EQ(kfs.size(), 8u);
+  for (std::size_t k = 0; k < kfs.size(); ++k) {
+    const auto to = kfs[k]->depth_link_to.lock();
+    const auto it = expected.find(kfs[k]->id);
+    if (it == expected.end()) {
+      EXPECT_FALSE(to) << kfs[k]->id;
+      continue;
+    }
+    ASSERT_TRUE(to) << kfs[k]->id;
+    EXPECT_EQ(to->id, it->second.first);
+    EXPECT_EQ(to.get(), kfs[static_cast<std::size_t>(it->second.first)].get());  // the loaded map's own keyframe
+    EXPECT_LT((kfs[k]->depth_link_T.matrix() - built[k]->depth_link_T.matrix()).norm(), 1e-12);
+    EXPECT_EQ(kfs[k]->depth_link_information, it->second.second);
+  }
+  EXPECT_EQ(encode_map(loaded, *a.ctx, 0), a.bytes);
+}
+
+TEST(MapSerializer, BadDepthLinksAreRejected) {
+  Built a(6, 50);
+  auto with_link = [&](std::int64_t from, std::int64_t to, int copies, double info_diag) {
+    auto sections = split_sections(a.bytes);
+    auto& payload = sections[5].payload;
+    payload.clear();
+    append(payload, static_cast<std::uint32_t>(copies));
+    for (int c = 0; c < copies; ++c) {
+      append(payload, from);
+      append(payload, to);
+      for (double v : {1.0, 0.0, 0.0, 0.0, 0.1, 0.0, 0.0}) append(payload, v);  // identity rotation, 10 cm
+      for (int r = 0; r < 6; ++r)
+        for (int col = r; col < 6; ++col) append(payload, r == col ? info_diag : 0.0);
+    }
+    return join_sections(a.bytes, kMapFileVersion, sections);
+  };
+  Map target;
+  EXPECT_EQ(decode_error(with_link(4, 3, 1, 100.0), a.ctx, target), "");
+  EXPECT_NE(decode_error(with_link(3, 3, 1, 100.0), a.ctx, target).find("depth link to itself"), std::string::npos);
+  EXPECT_NE(decode_error(with_link(4, 3, 2, 100.0), a.ctx, target).find("two depth links"), std::string::npos);
+  EXPECT_NE(decode_error(with_link(4, 99, 1, 100.0), a.ctx, target).find("unknown id 99"), std::string::npos);
+  EXPECT_NE(decode_error(with_link(4, 3, 1, -1.0), a.ctx, target).find("negative diagonal"), std::string::npos);
+  const std::string nan = decode_error(with_link(4, 3, 1, std::nan("")), a.ctx, target);
+  EXPECT_NE(nan.find("DLNK"), std::string::npos) << nan;
+  EXPECT_NE(nan.find("test.map"), std::string::npos) << nan;
+  // The rejected files left the target map alone: it holds the one good file's map.
+  std::lock_guard lock(target.mutex());
+  EXPECT_EQ(target.keyframe_count(), 6u);
+  EXPECT_EQ(target.keyframes()[4]->depth_link_to.lock()->id, 3);
 }
 
 }  // namespace
