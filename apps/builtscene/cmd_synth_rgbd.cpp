@@ -32,7 +32,7 @@ const bool registered_synth_rgbd = register_command({
       cmd.add_option("--loops", c->opt.loops, "Robot: times around the scene's loop")->capture_default_str();
       cmd.add_flag("--blur", c->opt.blur, "Motion blur integrated over the exposure (--exposure-ms)");
       auto* exposure = cmd.add_option("--exposure-ms", c->exposure_ms, "Shutter time of --blur in ms, 1 to 33 (implies --blur)")->capture_default_str();
-      cmd.add_option("--noise", c->noise, "none | kinect (depth and image noise)")->capture_default_str();
+      cmd.add_option("--noise", c->noise, "none | kinect (depth and image noise) | depth | image (one part of kinect alone)")->capture_default_str();
       cmd.add_flag("--exposure-changes", c->opt.exposure_changes, "Auto-exposure drift and steps");
       cmd.add_option("--light-fade", c->opt.light_fade_to,
                      "The light falls linearly to this fraction by the last frame (0.02 to 1); auto-gain keeps the brightness, so noise grows")
@@ -46,7 +46,9 @@ const bool registered_synth_rgbd = register_command({
         else throw InputError("--motion: expected handheld or robot, got '" + c->motion + "'");
         if (c->noise == "kinect") c->opt.kinect_noise = true;
         else if (c->noise == "none") c->opt.kinect_noise = false;
-        else throw InputError("--noise: expected none or kinect, got '" + c->noise + "'");
+        else if (c->noise == "depth") c->opt.image_noise = false;
+        else if (c->noise == "image") c->opt.depth_noise = false;
+        else throw InputError("--noise: expected none, kinect, depth or image, got '" + c->noise + "'");
         if (frames->count() > 0 && c->opt.frames < 1) throw InputError("--frames: must be at least 1, got " + std::to_string(c->opt.frames));
         c->opt.out = c->out;
         return synth::generate_rgbd_sequence(c->opt);

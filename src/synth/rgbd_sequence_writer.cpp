@@ -228,13 +228,14 @@ nlohmann::json generate_rgbd_sequence(const RgbdSequenceOptions& opt) {
 
   ColorCameraModel color;
   color.exposure = 1.15;
-  color.noise = opt.kinect_noise;
+  color.noise = opt.kinect_noise && opt.image_noise;
   int blur_subframes_max = 1;
   // At most 9 sub-frames per 20 ms of exposure (a 20 ms shutter keeps its old images).
   const int max_subframes = static_cast<int>(std::ceil(9.0 * opt.exposure_time_s / 0.02 - 1e-9));
   double mean_valid = 0;
   {
-    FrameFinisher finisher(std::max(1, opt.finish_threads), n, opt.seed, opt.kinect_noise, settings.depth_map_factor, timer);
+    FrameFinisher finisher(std::max(1, opt.finish_threads), n, opt.seed, opt.kinect_noise && opt.depth_noise,
+                           settings.depth_map_factor, timer);
     Progress progress("synth rgbd", static_cast<std::size_t>(n));
     RenderOutput sub;
     for (int i = 0; i < n; ++i) {
@@ -300,7 +301,10 @@ nlohmann::json generate_rgbd_sequence(const RgbdSequenceOptions& opt) {
   j["scene"] = opt.scene;
   j["out"] = opt.out.string();
   j["motion"] = opt.motion == MotionKind::Robot ? "robot" : "handheld";
-  j["noise"] = opt.kinect_noise ? "kinect" : "none";
+  j["noise"] = !opt.kinect_noise || (!opt.depth_noise && !opt.image_noise) ? "none"
+               : opt.depth_noise && opt.image_noise                        ? "kinect"
+               : opt.depth_noise                                           ? "depth"
+                                                                           : "image";
   j["blur"] = opt.blur;
   j["exposure_changes"] = opt.exposure_changes;
   j["light_fade_to"] = opt.light_fade_to;

@@ -21,6 +21,9 @@ struct RgbdSequenceOptions {
   int loops = 1;
   bool blur = false;              // motion blur integrated over the exposure time
   bool kinect_noise = true;       // false: exact depth and noise-free colour
+  // With kinect_noise, which of its parts (both by default; one alone tells which part a
+  // result depends on: `synth rgbd --noise depth|image`).
+  bool depth_noise = true, image_noise = true;
   bool exposure_changes = false;  // slow auto-exposure drift and steps
   double exposure_time_s = 0.02;  // shutter time for --blur; at most one frame interval (1/fps)
   // The light falls linearly over the sequence to this fraction of its start (1: constant);

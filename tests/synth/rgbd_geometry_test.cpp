@@ -267,3 +267,39 @@ TEST(RgbdGeometry, FadingLightKeepsTheBrightnessAndRaisesTheNoise) {
   EXPECT_LT(std::abs(mean[0]), 6.0);  // clipping at 255 of the brighter noise shifts it a little
   EXPECT_GT(sd[0], 8.0);              // the unfaded read noise is 1.6 levels
 }
+
+// `--noise depth` and `--noise image` are each one part of the Kinect model: the depth-only
+// sequence has the noise-free colour and the Kinect depth, the image-only one the reverse
+// (byte for byte; the two parts draw from separate random streams).
+TEST(RgbdGeometry, DepthAndImageNoiseAreTheTwoPartsOfTheKinectModel) {
+  auto make = [](const std::string& tag, bool kinect, bool depth, bool image) {
+    synth::RgbdSequenceOptions o;
+    o.scene = "lab-room";
+    o.out = temp_dir("noise_part_" + tag);
+    o.frames = 2;
+    o.seed = 3;
+    o.kinect_noise = kinect;
+    o.depth_noise = depth;
+    o.image_noise = image;
+    o.width = 160;
+    o.height = 120;
+    synth::generate_rgbd_sequence(o);
+    return o.out;
+  };
+  const auto none = make("none", false, true, true), kinect = make("kinect", true, true, true),
+             depth = make("depth", true, true, false), image = make("image", true, false, true);
+  auto same = [](const std::filesystem::path& a, const std::filesystem::path& b, const char* file) {
+    const cv::Mat x = cv::imread((a / file).string(), cv::IMREAD_UNCHANGED), y = cv::imread((b / file).string(), cv::IMREAD_UNCHANGED);
+    EXPECT_FALSE(x.empty()) << a / file;
+    return !x.empty() && x.size == y.size && x.type() == y.type() && cv::norm(x, y, cv::NORM_INF) == 0;
+  };
+  for (const char* frame : {"000000.png", "000001.png"}) {
+    const std::string rgb = std::string("rgb/") + frame, d = std::string("depth/") + frame;
+    EXPECT_FALSE(same(none, kinect, rgb.c_str())) << "the Kinect model changes the colour";
+    EXPECT_FALSE(same(none, kinect, d.c_str())) << "the Kinect model changes the depth";
+    EXPECT_TRUE(same(depth, none, rgb.c_str()));
+    EXPECT_TRUE(same(depth, kinect, d.c_str()));
+    EXPECT_TRUE(same(image, kinect, rgb.c_str()));
+    EXPECT_TRUE(same(image, none, d.c_str()));
+  }
+}
