@@ -2,6 +2,8 @@
 
 #include <algorithm>
 
+#include <fmt/format.h>
+
 #include "cli_parsing.hpp"
 #include "core/errors.hpp"
 #include "core/stage_timer.hpp"

@@ -33,6 +33,8 @@ OrbExtractorOptions OrbExtractorOptions::from_settings(const SettingsFile& s) {
   o.ini_th_fast = s.get_int("ORBextractor.iniThFAST", o.ini_th_fast);
   o.min_th_fast = s.get_int("ORBextractor.minThFAST", o.min_th_fast);
   o.noise_factor = s.get_double("ORBextractor.noiseFactor", o.noise_factor);
+  o.denoise_above = s.get_double("ORBextractor.denoiseAbove", o.denoise_above);
+  o.denoise_sigma_px = s.get_double("ORBextractor.denoiseSigma", o.denoise_sigma_px);
   try {
     o.validate();
   } catch (const InputError& e) {
@@ -48,6 +50,8 @@ void OrbExtractorOptions::validate() const {
   if (ini_th_fast < 1 || ini_th_fast > 255) throw InputError("ORBextractor.iniThFAST must be in [1, 255]");
   if (min_th_fast < 1 || min_th_fast > ini_th_fast) throw InputError("ORBextractor.minThFAST must be in [1, iniThFAST]");
   if (!(noise_factor >= 0 && noise_factor <= 100)) throw InputError("ORBextractor.noiseFactor must be in [0, 100]");
+  if (!(denoise_above >= 0 && denoise_above <= 255)) throw InputError("ORBextractor.denoiseAbove must be in [0, 255] (0 = off)");
+  if (!(denoise_sigma_px >= 0.3 && denoise_sigma_px <= 5)) throw InputError("ORBextractor.denoiseSigma must be in [0.3, 5] pixels");
 }
 
 ScalePyramid ScalePyramid::make(float scale_factor, int n_levels) {
@@ -139,6 +143,12 @@ void OrbExtractor::detect_level(int level, std::vector<cv::KeyPoint>& out) {
     kept.push_back(k);
   }
   if (min_th_fast_now_ < options_.ini_th_fast) {
+    const cv::Mat* weak_img = &img;
+    if (denoised_) {
+      if (level == 0) scratch.smoothed = smoothed_;
+      else cv::GaussianBlur(img, scratch.smoothed, cv::Size(), options_.denoise_sigma_px);
+      weak_img = &scratch.smoothed;
+    }
     // Adjacent weak cells of a row are scanned in one call: a FAST call has a fixed cost
     // (threshold table, row buffers) that dominated when every 32-pixel cell paid it.
     std::vector<cv::KeyPoint>& weak = scratch.weak;
@@ -159,7 +169,7 @@ void OrbExtractor::detect_level(int level, std::vector<cv::KeyPoint>& out) {
         cx = run_end;
         const cv::Rect roi(x0r - 3, cell_y0 - 3, x1r - x0r + 6, cell_y1 - cell_y0 + 6);
         weak.clear();
-        cv::FAST(img(roi), weak, min_th_fast_now_, true, cv::FastFeatureDetector::TYPE_9_16);
+        cv::FAST((*weak_img)(roi), weak, min_th_fast_now_, true, cv::FastFeatureDetector::TYPE_9_16);
         for (auto& k : weak) {
           k.pt.x += static_cast<float>(roi.x);
           k.pt.y += static_cast<float>(roi.y);
@@ -224,20 +234,27 @@ void OrbExtractor::describe_level(int l, std::vector<cv::KeyPoint>& kps, cv::Mat
   }
 }
 
+void OrbExtractor::prepare(const cv::Mat& gray) {
+  noise_sigma_ = 0;
+  min_th_fast_now_ = options_.min_th_fast;
+  if (options_.noise_factor > 0 || options_.denoise_above > 0)
+    noise_sigma_ = estimate_image_noise_sigma(gray, 4);  // 19k samples of 640 x 480: enough for a median
+  denoised_ = options_.denoise_above > 0 && noise_sigma_ > options_.denoise_above;
+  if (denoised_) cv::GaussianBlur(gray, smoothed_, cv::Size(), options_.denoise_sigma_px);
+  build_pyramid(gray);
+  if (options_.noise_factor > 0) {
+    const double sigma = denoised_ ? estimate_image_noise_sigma(smoothed_, 4) : noise_sigma_;
+    const int from_noise = static_cast<int>(std::ceil(options_.noise_factor * sigma));
+    min_th_fast_now_ = std::clamp(from_noise, options_.min_th_fast, options_.ini_th_fast);
+  }
+}
+
 void OrbExtractor::extract(const cv::Mat& gray_in, std::vector<cv::KeyPoint>& keypoints, cv::Mat& descriptors) {
   keypoints.clear();
   descriptors.release();
   if (gray_in.empty()) return;
   CV_Assert(gray_in.type() == CV_8UC1);
-  build_pyramid(gray_in);
-  noise_sigma_ = 0;
-  min_th_fast_now_ = options_.min_th_fast;
-  if (options_.noise_factor > 0) {
-    noise_sigma_ = estimate_image_noise_sigma(gray_in, 4);  // 19k samples of 640 x 480: enough for a median
-    const int from_noise = static_cast<int>(std::ceil(options_.noise_factor * noise_sigma_));
-    min_th_fast_now_ = std::clamp(from_noise, options_.min_th_fast, options_.ini_th_fast);
-  }
-
+  prepare(gray_in);
   // Levels are independent once the pyramid exists: detection, orientation and description
   // run per level, in parallel when allowed; the result does not depend on the thread count.
   const auto L = static_cast<std::size_t>(options_.n_levels);
@@ -271,7 +288,7 @@ void OrbExtractor::describe(const cv::Mat& gray, std::vector<cv::KeyPoint>& keyp
   descriptors.create(static_cast<int>(keypoints.size()), 32, CV_8UC1);
   if (keypoints.empty()) return;
   CV_Assert(gray.type() == CV_8UC1);
-  build_pyramid(gray);
+  prepare(gray);  // the same smoothing as extract() would apply
   const auto L = static_cast<std::size_t>(options_.n_levels);
   std::vector<std::vector<cv::KeyPoint>> per_level(L);
   std::vector<std::vector<std::size_t>> index(L);

@@ -30,12 +30,23 @@ struct OrbExtractorOptions {
   // trajectory by 10-16 % (docs/slam.md, "Image noise"). 6 sigma: 7scenes (sigma ~0.5)
   // keeps 7; generated worlds (sigma 2-2.5) get 12-15.
   double noise_factor = 6.0;
+  // Above this much image noise (grey levels, estimated per frame as for noise_factor), the
+  // second FAST pass (cells where nothing passed ini_th_fast) runs on the level smoothed by a
+  // Gaussian of denoise_sigma_px, at noise_factor times the smoothed image's noise; strong
+  // corners, orientation and descriptors still come from the unsmoothed level. 0 = never.
+  // Why: at sigma ~2.5 the raised threshold (15) drops the faint corners of far texture and
+  // plain walls, and the generated corridor's loop then bends (docs/slam.md, "Image noise,
+  // part 2"); smoothing lowers the noise about 3x at 1 px. Off by default: smoothing the
+  // whole image helped the corridor 3x but cost the textured rooms (measured there).
+  double denoise_above = 0.0;
+  double denoise_sigma_px = 1.0;
   // Process pyramid levels on OpenCV's thread pool (same output either way). Off by default:
   // on the shared 2-core machine it did not lower the median time (load 10, not conclusive),
   // and the local-mapping thread needs the second core.
   bool parallel_levels = false;
 
-  // ORBextractor.nFeatures, .scaleFactor, .nLevels, .iniThFAST, .minThFAST, .noiseFactor when present;
+  // ORBextractor.nFeatures, .scaleFactor, .nLevels, .iniThFAST, .minThFAST, .noiseFactor,
+  // .denoiseAbove, .denoiseSigma when present;
   // InputError naming the key for values out of range.
   static OrbExtractorOptions from_settings(const SettingsFile& settings);
   void validate() const;  // throws InputError
@@ -79,6 +90,7 @@ class OrbExtractor : public FeatureExtractor {
   // it led to.
   double last_noise_sigma() const { return noise_sigma_; }
   int last_min_th_fast() const { return min_th_fast_now_; }
+  bool last_denoised() const { return denoised_; }  // OrbExtractorOptions::denoise_above
 
  private:
   OrbExtractorOptions options_;
@@ -89,6 +101,10 @@ class OrbExtractor : public FeatureExtractor {
   std::vector<std::vector<cv::KeyPoint>> per_level_;
   double noise_sigma_ = 0;
   int min_th_fast_now_ = 0;
+  bool denoised_ = false;
+  cv::Mat smoothed_;  // level 0 smoothed, for its noise estimate
+  // The noise estimate, the optional smoothing and the pyramid of one input image.
+  void prepare(const cv::Mat& gray);
   // Working memory of one pyramid level, kept across frames: at 30 frames per second,
   // allocating these per frame (about 1 MB of smoothed images alone) cost page faults and
   // malloc time worth ~10 % of the extraction.
@@ -96,7 +112,7 @@ class OrbExtractor : public FeatureExtractor {
     std::vector<cv::KeyPoint> candidates, weak, kept;
     std::vector<char> has_strong;
     QuadtreeScratch quadtree;
-    cv::Mat blurred, descriptors;
+    cv::Mat blurred, descriptors, smoothed;
     std::vector<std::uint16_t> smoothing;
   };
   std::vector<LevelScratch> scratch_;
