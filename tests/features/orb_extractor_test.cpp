@@ -150,9 +150,11 @@ TEST(OrbExtractor, NoiseAdaptiveThresholdFindsNoCornersOnAPlainNoisyWall) {
   rng.fill(noise, cv::RNG::NORMAL, 0.0, 2.5);  // the generated worlds' level (docs/slam.md)
   cv::Mat wall;
   cv::Mat(cv::Mat(480, 640, CV_32F, cv::Scalar(140)) + noise).convertTo(wall, CV_8U);
-  OrbExtractorOptions fixed;
+  OrbExtractorOptions fixed, threshold_only;
   fixed.noise_factor = 0;  // ORB-SLAM's fixed fallback of 7 grey levels
-  OrbExtractor plain(fixed), adaptive;
+  fixed.denoise_above = 0;
+  threshold_only.denoise_above = 0;  // the raised threshold alone (the smoothing: next test)
+  OrbExtractor plain(fixed), adaptive(threshold_only);
   std::vector<cv::KeyPoint> k_fixed, k_adaptive;
   cv::Mat d;
   plain.extract(wall, k_fixed, d);
@@ -187,9 +189,9 @@ TEST(OrbExtractor, DenoisingAboveANoiseLevelFindsTheFaintTexturesCorners) {
     cv::Mat(base + n).convertTo(out, CV_8U);
     return out;
   };
-  OrbExtractorOptions dn;
-  dn.denoise_above = 1.5;
-  OrbExtractor plain, smoothing(dn);
+  OrbExtractorOptions no_smoothing;
+  no_smoothing.denoise_above = 0;
+  OrbExtractor plain(no_smoothing), smoothing;  // the default smooths above sigma 1.5
   std::vector<cv::KeyPoint> truth;
   cv::Mat d;
   {
