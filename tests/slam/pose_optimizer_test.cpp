@@ -104,21 +104,28 @@ TEST(PoseOptimizer, TooFewMatchesLeavesPoseUntouched) {
 // The motion prior, closed form at the limit: points at infinity (mono matches 10 km away)
 // fix the rotation and say nothing about the translation, so the translation must come
 // from the prior exactly, and the rotation from the points even with a prior turned 1 deg.
-TEST(PoseOptimizer, APriorFixesWhatThePointsLeaveFreeAndNothingElse) {
-  std::mt19937 rng(7);
+// `n` monocular matches 10 km in front of a camera at `truth`: they fix its rotation and say
+// nothing about its translation.
+void points_at_infinity(const SE3& truth, std::size_t n, unsigned seed, std::vector<Eigen::Vector3d>& pts,
+                        std::vector<Observation>& obs) {
+  std::mt19937 rng(seed);
   std::uniform_real_distribution<double> ux(-1.0, 1.0);
-  const auto K = test::kinect();
-  const SE3 truth(so3_exp(Eigen::Vector3d(0.02, -0.1, 0.03)), Eigen::Vector3d(0.2, 0.05, -0.3));
-  std::vector<Eigen::Vector3d> pts;
-  std::vector<Observation> obs;
-  while (pts.size() < 100) {
+  while (pts.size() < n) {
     const Eigen::Vector3d pc = Eigen::Vector3d(ux(rng), 0.75 * ux(rng), 1.5).normalized() * 1e4;
     Observation o;
-    o.uv = test::project(K, pc);
+    o.uv = test::project(test::kinect(), pc);
     o.inv_sigma2 = 1.0;
     pts.push_back(truth.inverse() * pc);
     obs.push_back(o);
   }
+}
+
+TEST(PoseOptimizer, APriorFixesWhatThePointsLeaveFreeAndNothingElse) {
+  const auto K = test::kinect();
+  const SE3 truth(so3_exp(Eigen::Vector3d(0.02, -0.1, 0.03)), Eigen::Vector3d(0.2, 0.05, -0.3));
+  std::vector<Eigen::Vector3d> pts;
+  std::vector<Observation> obs;
+  points_at_infinity(truth, 100, 7, pts, obs);
   const Eigen::Vector3d offset(0.04, -0.03, 0.05);
   PoseOptimizerOptions o;
   o.prior_T_cw = SE3(so3_exp(Eigen::Vector3d(0, M_PI / 180.0, 0)), Eigen::Vector3d::Zero()) * truth;
@@ -140,20 +147,11 @@ TEST(PoseOptimizer, APriorFixesWhatThePointsLeaveFreeAndNothingElse) {
 // each at a different translation, so the answer takes each combination from its own prior
 // and the matrix's off-diagonal terms decide it.
 TEST(PoseOptimizer, FullInformationPriorsHoldOnlyTheirDirections) {
-  std::mt19937 rng(11);
-  std::uniform_real_distribution<double> ux(-1.0, 1.0);
   const auto K = test::kinect();
   const SE3 truth(so3_exp(Eigen::Vector3d(-0.03, 0.2, 0.01)), Eigen::Vector3d(0.1, -0.2, 0.4));
   std::vector<Eigen::Vector3d> pts;
   std::vector<Observation> obs;
-  while (pts.size() < 60) {
-    const Eigen::Vector3d pc = Eigen::Vector3d(ux(rng), 0.75 * ux(rng), 1.5).normalized() * 1e4;
-    Observation o;
-    o.uv = test::project(K, pc);
-    o.inv_sigma2 = 1.0;
-    pts.push_back(truth.inverse() * pc);
-    obs.push_back(o);
-  }
+  points_at_infinity(truth, 60, 11, pts, obs);
   const Eigen::Vector3d a(0.30, 0.10, -0.20), b(-0.10, 0.25, 0.70);  // the two priors' translations
   PosePrior pa{SE3(truth.rotation(), a), Eigen::Matrix<double, 6, 6>::Zero()};
   PosePrior pb{SE3(truth.rotation(), b), Eigen::Matrix<double, 6, 6>::Zero()};
