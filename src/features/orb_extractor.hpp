@@ -35,12 +35,11 @@ struct OrbExtractorOptions {
   // Gaussian of denoise_sigma_px, at noise_factor times the smoothed image's noise; strong
   // corners, orientation and descriptors still come from the unsmoothed level. 0 = never.
   // Why: at sigma ~2.5 the raised threshold (15) drops the faint corners of far texture and
-  // plain walls, and the generated corridor's loop then bends; smoothing lowers the noise
-  // about 3x at 1 px. Measured (docs/slam.md, "Image noise, part 2"): corridor ATE 0.805 ->
-  // 0.412 m, office 12.3 -> 10.7 cm, lab room 1.89 -> 2.03 cm; 7-Scenes (sigma ~0.5) is
-  // below the level and unchanged. Smoothing the whole image instead helped the corridor
-  // more (0.253 m) but doubled the office's error.
-  double denoise_above = 1.5;
+  // plain walls, and the generated corridor's loop then bends. Off by default (docs/slam.md,
+  // "Image noise, part 2"): at 1.5 it took the 2-loop corridor from 0.805 to 0.412 m and the
+  // office from 12.3 to 10.7 cm, but the corridor's first 300 frames, threaded, made 162
+  // keyframes instead of 27 (ATE 26.6 against 4.4 cm).
+  double denoise_above = 0.0;
   double denoise_sigma_px = 1.0;
   // Process pyramid levels on OpenCV's thread pool (same output either way). Off by default:
   // on the shared 2-core machine it did not lower the median time (load 10, not conclusive),

@@ -189,9 +189,10 @@ TEST(OrbExtractor, DenoisingAboveANoiseLevelFindsTheFaintTexturesCorners) {
     cv::Mat(base + n).convertTo(out, CV_8U);
     return out;
   };
-  OrbExtractorOptions no_smoothing;
+  OrbExtractorOptions no_smoothing, with_smoothing;
   no_smoothing.denoise_above = 0;
-  OrbExtractor plain(no_smoothing), smoothing;  // the default smooths above sigma 1.5
+  with_smoothing.denoise_above = 1.5;
+  OrbExtractor plain(no_smoothing), smoothing(with_smoothing);
   std::vector<cv::KeyPoint> truth;
   cv::Mat d;
   {
