@@ -41,7 +41,8 @@ struct SlamOptions {
   bool depth_links = false;
   double depth_link_weight = 1.0;
   double motion_prior_cm = 0, motion_prior_deg = 0.3;
-  double depth_prior = 0;
+  double depth_prior = slam::TrackingOptions{}.depth_prior_weight;
+  int depth_prior_below = slam::TrackingOptions{}.depth_prior_below_inliers;
   SlamOgmOptions ogm;
   DescriptorOptions features;
 };
@@ -80,6 +81,7 @@ nlohmann::json run_slam(const SlamOptions& opt) {
   so.tracking.depth_links = opt.depth_links;
   so.tracking.depth_link_weight = opt.depth_link_weight;
   so.tracking.depth_prior_weight = opt.depth_prior;
+  so.tracking.depth_prior_below_inliers = opt.depth_prior_below;
   if (opt.motion_prior_cm > 0) {
     so.tracking.motion_prior = true;
     so.tracking.motion_prior_sigma_m = opt.motion_prior_cm / 100.0;
@@ -293,9 +295,14 @@ const bool registered_slam = register_command({
           ->capture_default_str()
           ->check(CLI::Range(0.001, 45.0));
       cmd.add_option("--depth-prior", opt->depth_prior,
-                     "Experimental: align each frame's depth to the newest keyframe's (ICP) and hold the pose to "
-                     "it with the ICP's information times this weight (0 = off; docs/slam.md)")
+                     "Align the frame's depth to the newest keyframe's (ICP) and hold the pose to it with the ICP's "
+                     "information times this weight, where features are few (0 = off; docs/slam.md)")
+          ->capture_default_str()
           ->check(CLI::Range(0.0, 1e6));
+      cmd.add_option("--depth-prior-below", opt->depth_prior_below,
+                     "... only after a frame with fewer map inliers than this (0 = every frame)")
+          ->capture_default_str()
+          ->check(CLI::NonNegativeNumber);
       cmd.add_option("--ogm-out", opt->ogm.out,
                      "Output: occupancy grid built live from keyframes (MAP.yaml, .pgm, .state, .png)");
       cmd.add_option("--ogm-world", opt->ogm.world,

@@ -27,6 +27,9 @@ const bool registered_synth_rgbd = register_command({
       cmd.add_option("--scene", c->opt.scene, "Scene: " + names)->capture_default_str();
       cmd.add_option("--out", c->out, "Output folder (created)")->required();
       auto* frames = cmd.add_option("--frames", c->opt.frames, "Number of frames (default: handheld 300, robot: --loops loops)");
+      cmd.add_option("--first-frame", c->opt.first_frame,
+                     "Write only frames from this index on (the same files as in the whole sequence)")
+          ->capture_default_str();
       cmd.add_option("--seed", c->opt.seed, "Seed of the motion and the noise")->capture_default_str();
       cmd.add_option("--motion", c->motion, "handheld | robot")->capture_default_str();
       cmd.add_option("--loops", c->opt.loops, "Robot: times around the scene's loop")->capture_default_str();

@@ -228,6 +228,8 @@ void Tracker::link_by_depth(KeyFrame& kf, const KeyFrame& prev) const {
 
 std::optional<PosePrior> Tracker::depth_prior() const {
   if (!(opt_.depth_prior_weight > 0) || depth_.empty() || last_kf_depth_.empty()) return std::nullopt;
+  // inliers_ still holds the last frame's count here.
+  if (opt_.depth_prior_below_inliers > 0 && inliers_ >= opt_.depth_prior_below_inliers) return std::nullopt;
   const auto kf = last_kf_.lock();
   if (!kf || kf->bad) return std::nullopt;
   const auto start = std::chrono::steady_clock::now();

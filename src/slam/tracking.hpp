@@ -56,11 +56,16 @@ struct TrackingOptions {
   // (PoseOptimizerOptions::prior_*), only when the pose came from the motion model.
   bool motion_prior = false;
   double motion_prior_sigma_m = 0.01, motion_prior_sigma_rad = 0.005;
-  // Every frame's depth aligned to the newest keyframe's (ICP from the motion model's pose)
-  // as a prior with the ICP's information times this weight in local-map tracking's pose
-  // optimization (0 = off): where a few far features leave a slide and a turn alike, the
-  // walls' depth tells them apart. Experimental, docs/slam.md.
-  double depth_prior_weight = 0.0;
+  // The frame's depth aligned to the newest keyframe's (ICP from the motion model's pose) as
+  // a prior with the ICP's information times this weight in local-map tracking's pose
+  // optimization (0 = off): where a few far features leave a slide and a turn alike (a
+  // corridor's end wall, the only texture in view under colour noise), the walls' and the
+  // floor's depth tell them apart. Only after a frame with fewer local-map inliers than
+  // depth_prior_below_inliers (0 = every frame): where the features are many the prior's
+  // own errors (depth not registered to colour on real sensors) cost more than it gives.
+  // Measured: docs/slam.md, "The depth prior".
+  double depth_prior_weight = 0.1;
+  int depth_prior_below_inliers = 100;
 };
 
 enum class TrackingState { kNotInitialized, kOk, kLost };

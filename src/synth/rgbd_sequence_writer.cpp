@@ -85,10 +85,12 @@ class FrameFinisher {
     for (auto& w : workers_) w.join();
     if (!error_.empty()) throw Failure(error_);
   }
-  double mean_valid() const {
+  // Mean over the frames from `first` on (the ones written).
+  double mean_valid(int first = 0) const {
     double s = 0;
-    for (double v : valid_) s += v;
-    return valid_.empty() ? 0.0 : s / static_cast<double>(valid_.size());
+    for (std::size_t i = static_cast<std::size_t>(std::max(0, first)); i < valid_.size(); ++i) s += valid_[i];
+    const auto count = static_cast<double>(valid_.size()) - std::max(0, first);
+    return count > 0 ? s / count : 0.0;
   }
 
  private:
@@ -219,6 +221,10 @@ nlohmann::json generate_rgbd_sequence(const RgbdSequenceOptions& opt) {
   save_camera_settings(opt.out / "camera.yaml", settings);
 
   const int n = static_cast<int>(motion.poses.size());
+  const int first = opt.first_frame;
+  if (first < 0 || first >= n)
+    throw InputError("--first-frame: must be between 0 and " + std::to_string(n - 1) + " (the sequence has " + std::to_string(n) +
+                     " frames), got " + std::to_string(first));
   const double t0 = 1.0;
   Trajectory gt;
   std::ofstream rgb_list(opt.out / "rgb.txt"), depth_list(opt.out / "depth.txt");
@@ -236,9 +242,9 @@ nlohmann::json generate_rgbd_sequence(const RgbdSequenceOptions& opt) {
   {
     FrameFinisher finisher(std::max(1, opt.finish_threads), n, opt.seed, opt.kinect_noise && opt.depth_noise,
                            settings.depth_map_factor, timer);
-    Progress progress("synth rgbd", static_cast<std::size_t>(n));
+    Progress progress("synth rgbd", static_cast<std::size_t>(n - first));
     RenderOutput sub;
-    for (int i = 0; i < n; ++i) {
+    for (int i = first; i < n; ++i) {
       const double t = t0 + i / settings.fps;
       const SE3& pose = motion.poses[static_cast<std::size_t>(i)];
       gt.push_back({t, pose});
@@ -287,10 +293,10 @@ nlohmann::json generate_rgbd_sequence(const RgbdSequenceOptions& opt) {
       job.rgb_path = opt.out / "rgb" / name;
       job.depth_path = opt.out / "depth" / name;
       finisher.push(std::move(job));
-      progress.update(static_cast<std::size_t>(i + 1));
+      progress.update(static_cast<std::size_t>(i + 1 - first));
     }
     finisher.finish();
-    mean_valid = finisher.mean_valid();
+    mean_valid = finisher.mean_valid(first);
     progress.finish();
   }
   if (!rgb_list || !depth_list) throw Failure(located(opt.out, 0, "cannot write rgb.txt/depth.txt"));
@@ -309,9 +315,10 @@ nlohmann::json generate_rgbd_sequence(const RgbdSequenceOptions& opt) {
   j["exposure_changes"] = opt.exposure_changes;
   j["light_fade_to"] = opt.light_fade_to;
   j["seed"] = opt.seed;
-  j["frames"] = n;
+  j["frames"] = n - first;
+  j["first_frame"] = first;
   j["seconds"] = seconds;
-  j["fps"] = n / seconds;
+  j["fps"] = (n - first) / seconds;
   j["width"] = opt.width;
   j["height"] = opt.height;
   j["tags"] = scene.tags.size();
@@ -328,7 +335,8 @@ nlohmann::json generate_rgbd_sequence(const RgbdSequenceOptions& opt) {
     j["exposure_ms"] = opt.exposure_time_s * 1000.0;
   }
   j["stage_ms"] = timer.summary();
-  spdlog::info("synth rgbd: {} frames of {} in {:.1f} s ({:.1f} fps) -> {}", n, opt.scene, seconds, n / seconds, opt.out.string());
+  spdlog::info("synth rgbd: {} frames of {} in {:.1f} s ({:.1f} fps) -> {}", n - first, opt.scene, seconds, (n - first) / seconds,
+               opt.out.string());
   return j;
 }
 

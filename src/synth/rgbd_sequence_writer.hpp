@@ -16,6 +16,9 @@ struct RgbdSequenceOptions {
   std::string scene = "demo";
   std::filesystem::path out;
   int frames = 0;                 // 0: the motion's default (handheld 300, robot: --loops loops)
+  // Write only frames first_frame.. of the sequence (names, times and bytes as in the whole
+  // sequence; every frame's noise is seeded by its index): a slice of a long run for tests.
+  int first_frame = 0;
   std::uint64_t seed = 1;
   MotionKind motion = MotionKind::Handheld;
   int loops = 1;

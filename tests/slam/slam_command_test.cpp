@@ -132,7 +132,8 @@ TEST_F(SlamCommand, BadPriorAndLinkValuesAreUsageErrorsNamingTheFlag) {
                                    std::pair{" --motion-prior 1 --motion-prior-deg nan", "--motion-prior-deg"},
                                    std::pair{" --depth-links --depth-link-weight 0", "--depth-link-weight"},
                                    std::pair{" --depth-prior -0.5", "--depth-prior"},
-                                   std::pair{" --depth-prior nan", "--depth-prior"}}) {
+                                   std::pair{" --depth-prior nan", "--depth-prior"},
+                                   std::pair{" --depth-prior-below -3", "--depth-prior-below"}}) {
     const auto r = run_cli(base + args);
     EXPECT_EQ(r.exit_code, 2) << args;
     EXPECT_NE(r.err.find(flag), std::string::npos) << args << ": " << r.err;

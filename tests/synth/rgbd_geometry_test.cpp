@@ -8,6 +8,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "core/errors.hpp"
 #include "io/tum_dataset.hpp"
 #include "rgbd_test_util.hpp"
 #include "synth/renderer.hpp"
@@ -302,4 +303,53 @@ TEST(RgbdGeometry, DepthAndImageNoiseAreTheTwoPartsOfTheKinectModel) {
     EXPECT_TRUE(same(image, kinect, rgb.c_str()));
     EXPECT_TRUE(same(image, none, d.c_str()));
   }
+}
+
+// `--first-frame` writes a slice of the sequence: each frame it writes has the name, time,
+// pose and bytes of the same frame in the whole sequence, and nothing before it is written.
+TEST(RgbdGeometry, AFirstFrameSliceEqualsThatPartOfTheWholeSequence) {
+  auto make = [](const std::string& tag, int first) {
+    synth::RgbdSequenceOptions o;
+    o.scene = "corridor-loop";
+    o.motion = synth::MotionKind::Robot;
+    o.out = temp_dir("slice_" + tag);
+    o.frames = 4;
+    o.first_frame = first;
+    o.seed = 2;
+    o.width = 160;
+    o.height = 120;
+    const auto j = synth::generate_rgbd_sequence(o);
+    EXPECT_EQ(j.at("frames").get<int>(), 4 - first);
+    return o.out;
+  };
+  const auto whole = make("whole", 0), slice = make("from2", 2);
+  EXPECT_FALSE(std::filesystem::exists(slice / "rgb" / "000001.png"));
+  for (const char* file : {"rgb/000002.png", "depth/000002.png", "rgb/000003.png", "depth/000003.png"}) {
+    const cv::Mat x = cv::imread((whole / file).string(), cv::IMREAD_UNCHANGED), y = cv::imread((slice / file).string(), cv::IMREAD_UNCHANGED);
+    ASSERT_FALSE(y.empty()) << slice / file;
+    ASSERT_EQ(x.size, y.size);
+    EXPECT_EQ(cv::norm(x, y, cv::NORM_INF), 0.0) << file;
+  }
+  auto lines = [](const std::filesystem::path& p) {
+    std::vector<std::string> out;
+    std::ifstream in(p);
+    for (std::string l; std::getline(in, l);)
+      if (!l.empty() && l[0] != '#') out.push_back(l);
+    return out;
+  };
+  const auto gt_whole = lines(whole / "groundtruth.txt"), gt_slice = lines(slice / "groundtruth.txt");
+  ASSERT_EQ(gt_whole.size(), 4u);
+  ASSERT_EQ(gt_slice.size(), 2u);
+  EXPECT_EQ(gt_slice[0], gt_whole[2]);
+  EXPECT_EQ(gt_slice[1], gt_whole[3]);
+  const auto rgb_whole = lines(whole / "rgb.txt");
+  ASSERT_EQ(rgb_whole.size(), 4u);
+  EXPECT_EQ(lines(slice / "rgb.txt"), std::vector<std::string>(rgb_whole.begin() + 2, rgb_whole.end()));
+  synth::RgbdSequenceOptions bad;
+  bad.scene = "lab-room";
+  bad.frames = 3;
+  bad.first_frame = 3;
+  bad.out = temp_dir("slice_bad");
+  EXPECT_THROW(synth::generate_rgbd_sequence(bad), builtscene::InputError);
+  for (const auto& d : {whole, slice, bad.out}) std::filesystem::remove_all(d);
 }
