@@ -1,6 +1,7 @@
 #include "slam/relocalizer.hpp"
 
 #include <algorithm>
+#include <cmath>
 
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core/eigen.hpp>
@@ -32,6 +33,11 @@ std::shared_ptr<KeyFrame> Relocalizer::relocalize(Frame& frame) const {
   auto candidates = db_.relocalization_candidates(bow);
   if (static_cast<int>(candidates.size()) > opt_.max_candidates) candidates.resize(static_cast<std::size_t>(opt_.max_candidates));
 
+  // The best pose short of min_inliers, kept for the two-frame rule.
+  int best_good = 0;
+  SE3 best_T;
+  std::shared_ptr<KeyFrame> best_kf;
+  std::vector<std::shared_ptr<MapPoint>> best_points;
   const auto& cam = frame.f->ctx->camera;
   const cv::Matx33d K(cam.fx, 0, cam.cx, 0, cam.fy, cam.cy, 0, 0, 1);
   for (KeyFrame* kf : candidates) {
@@ -86,11 +92,33 @@ std::shared_ptr<KeyFrame> Relocalizer::relocalize(Frame& frame) const {
     }
     if (good >= opt_.min_inliers) {
       ++stats_.successes;
+      last_tentative_ = {};
       return kf->shared_from_this();
+    }
+    if (good > best_good) {
+      best_good = good;
+      best_T = frame.T_cw;
+      best_kf = kf->shared_from_this();
+      best_points = frame.points;
     }
   }
   frame.clear_matches();
-  return nullptr;
+  const Tentative previous = last_tentative_;
+  last_tentative_ = {};
+  if (opt_.min_inliers_twice <= 0 || best_good < opt_.min_inliers_twice) return nullptr;
+  last_tentative_ = {frame.id, best_T};
+  if (previous.frame_id != frame.id - 1) return nullptr;
+  const SE3 moved = best_T * previous.T_cw.inverse();
+  if (moved.translation().norm() > opt_.twice_max_m ||
+      Eigen::AngleAxisd(moved.rotation()).angle() > opt_.twice_max_deg * M_PI / 180.0)
+    return nullptr;
+  frame.set_pose(best_T);
+  frame.points = best_points;
+  std::fill(frame.outlier.begin(), frame.outlier.end(), 0);
+  ++stats_.successes;
+  ++stats_.confirmed_twice;
+  last_tentative_ = {};
+  return best_kf;
 }
 
 }  // namespace builtscene::slam
