@@ -30,7 +30,7 @@ echo "markers_corridor: localization over $LOOPS loops" >&2
 "$BIN" -q localize --dataset "$loc_run" --map "$WORK/corridor.bsmap" --trajectory "$WORK/loc_traj.txt" \
   --markers-out "$WORK/measured.csv" --sizes-from "$loc_run/markers.csv" --json > "$WORK/localize.json"
 status=0
-"$BIN" -q eval markers --measured "$WORK/measured.csv" --truth "$loc_run/markers.csv" --align 2d \
+"$BIN" -q eval markers --measured "$WORK/measured.csv" --truth "$loc_run/markers.csv" --align 3d \
   --out "$WORK/eval" --json > "$WORK/eval.json" || status=$?
 python3 - "$WORK" "$status" <<'PY' > bench-out/markers_corridor.json
 import json, sys, os
