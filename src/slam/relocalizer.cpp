@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core/eigen.hpp>
@@ -103,21 +104,21 @@ std::shared_ptr<KeyFrame> Relocalizer::relocalize(Frame& frame) const {
     }
   }
   frame.clear_matches();
-  const Tentative previous = last_tentative_;
-  last_tentative_ = {};
+  // Two-frame rule: this frame's best pose short of min_inliers is accepted when the frame
+  // before left one close to it; otherwise it waits for the next frame's.
+  const Tentative previous = std::exchange(last_tentative_, {});
   if (opt_.min_inliers_twice <= 0 || best_good < opt_.min_inliers_twice) return nullptr;
-  last_tentative_ = {frame.id, best_T};
-  if (previous.frame_id != frame.id - 1) return nullptr;
   const SE3 moved = best_T * previous.T_cw.inverse();
-  if (moved.translation().norm() > opt_.twice_max_m ||
-      Eigen::AngleAxisd(moved.rotation()).angle() > opt_.twice_max_deg * M_PI / 180.0)
+  const bool agrees = previous.frame_id == frame.id - 1 && moved.translation().norm() <= opt_.twice_max_m &&
+                      so3_log(moved.rotation()).norm() <= opt_.twice_max_deg * M_PI / 180.0;
+  if (!agrees) {
+    last_tentative_ = {frame.id, best_T};
     return nullptr;
+  }
   frame.set_pose(best_T);
   frame.points = best_points;
   std::fill(frame.outlier.begin(), frame.outlier.end(), 0);
   ++stats_.successes;
-  ++stats_.confirmed_twice;
-  last_tentative_ = {};
   return best_kf;
 }
 

@@ -42,7 +42,6 @@ class Relocalizer {
 
   struct Stats {
     long attempts = 0, successes = 0;
-    long confirmed_twice = 0;  // successes by min_inliers_twice
   };
   const Stats& stats() const { return stats_; }
 
