@@ -93,7 +93,10 @@ nlohmann::json run_localize(const LocalizeOptions& opt) {
       {"processed_frames", processed},
       {"tracked_frames", tracked},
       {"lost_frames", lost},
-      {"relocalizations", {{"count", system.relocalized_frames().size()}, {"frames", system.relocalized_frames()}}},
+      {"relocalizations",
+       {{"count", system.relocalized_frames().size()},
+        {"frames", system.relocalized_frames()},
+        {"while_on_odometry", system.odometry_relocalizations()}}},
       {"first_relocalized_frame", system.first_relocalized_frame() >= 0 ? nlohmann::json(system.first_relocalized_frame())
                                                                          : nlohmann::json(nullptr)},
       {"bad_input", frames.bad_input()},

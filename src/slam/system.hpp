@@ -134,6 +134,8 @@ class System {
   std::shared_ptr<const BowVocabulary> vocabulary() const { return vocabulary_; }
   // Frame ids (0-based count of frames passed to track_rgbd) where relocalization succeeded.
   std::vector<long> relocalized_frames() const { return tracker_->relocalized_frames(); }
+  // Localization mode: frames on visual odometry whose pose came from relocalization instead.
+  long odometry_relocalizations() const { return tracker_->odometry_relocalizations(); }
   // Frames whose pose came from RGB-D odometry because features could not hold it.
   long depth_odometry_frames() const { return tracker_->depth_odometry_frames(); }
   long depth_odometry_prior_frames() const { return tracker_->depth_odometry_prior_frames(); }

@@ -66,6 +66,23 @@ TrackingOutcome Tracker::track(Frame frame) {
         predicted_T_cw_.reset();
         ok = track_reference_keyframe();
       }
+      // Localization mode on visual odometry (the last frame matched too few map points): the
+      // place is searched in the whole map as well and its pose wins when found (ORB-SLAM2's
+      // mbVO). The odometry alone drifts, and the covisible local map it leaves behind may no
+      // longer be where the camera is.
+      if (!keyframe_creation_ && relocalizer_ && inliers_ < opt_.min_local_map_inliers) {
+        Frame probe = current_;
+        const auto start = std::chrono::steady_clock::now();
+        auto kf = relocalizer_->relocalize(probe);
+        if (timer_) timer_->add("relocalization", ms_since(start));
+        if (kf) {
+          current_ = std::move(probe);
+          reference_ = kf;
+          predicted_T_cw_.reset();
+          ok = true;
+          ++odometry_relocalizations_;
+        }
+      }
     } else {
       current_.clear_matches();
       if (relocalization_hook_ && relocalization_hook_(current_)) {
@@ -227,11 +244,25 @@ void Tracker::link_by_depth(KeyFrame& kf, const KeyFrame& prev) const {
 }
 
 std::optional<PosePrior> Tracker::depth_prior() const {
-  if (!(opt_.depth_prior_weight > 0) || depth_.empty() || last_kf_depth_.empty()) return std::nullopt;
+  if (!(opt_.depth_prior_weight > 0) || depth_.empty()) return std::nullopt;
   // inliers_ still holds the last frame's count here.
   if (opt_.depth_prior_below_inliers > 0 && inliers_ >= opt_.depth_prior_below_inliers) return std::nullopt;
-  const auto kf = last_kf_.lock();
-  if (!kf || kf->bad) return std::nullopt;
+  // The depth to align to: the newest keyframe's in SLAM mode; in localization mode, where no
+  // keyframe is made, the last tracked frame's.
+  const cv::Mat* ref_depth = nullptr;
+  SE3 T_kf_cw;
+  if (keyframe_creation_) {
+    const auto kf = last_kf_.lock();
+    if (!kf || kf->bad || last_kf_depth_.empty()) return std::nullopt;
+    ref_depth = &last_kf_depth_;
+    T_kf_cw = kf->pose();
+  } else {
+    // Only while the map holds the pose: on visual odometry alone (a plain corridor) the
+    // frame-to-frame alignment slides along the walls and drags the pose with it.
+    if (!has_last_ || last_depth_.empty() || inliers_ < opt_.min_local_map_inliers) return std::nullopt;
+    ref_depth = &last_depth_;
+    T_kf_cw = last_.T_cw;
+  }
   const auto start = std::chrono::steady_clock::now();
   const Intrinsics K = intrinsics_of(*ctx_);
   IcpWithPriorOptions o;
@@ -241,10 +272,9 @@ std::optional<PosePrior> Tracker::depth_prior() const {
   o.max_gap_m = 0.3;
   o.prior_sigma_m = 0.05;  // as the keyframe links: the depth decides where it can
   o.prior_sigma_rad = 0.02;
-  const SE3 T_kf_cw = kf->pose();
   const SE3 predicted = current_.T_cw * T_kf_cw.inverse();
   Eigen::Matrix<double, 6, 6> info;  // (translation, rotation) of the left perturbation
-  const auto T = icp_with_motion_prior(last_kf_depth_, depth_, K.fx, K.fy, K.cx, K.cy, predicted, o, &info);
+  const auto T = icp_with_motion_prior(*ref_depth, depth_, K.fx, K.fy, K.cx, K.cy, predicted, o, &info);
   if (timer_) timer_->add("depth_prior", ms_since(start));
   if (!T) return std::nullopt;
   const SE3 d = *T * predicted.inverse();
@@ -487,18 +517,7 @@ void Tracker::update_local_map() {
   }
 }
 
-bool Tracker::track_local_map() {
-  update_local_map();
-  // Points already matched are visible; do not search them again.
-  for (auto& p : current_.points) {
-    if (!p) continue;
-    if (p->bad) {
-      p = nullptr;
-      continue;
-    }
-    ++p->visible;
-    p->track_mark = current_.id;  // already matched in this frame
-  }
+std::vector<ProjectedPoint> Tracker::project_local_points() {
   const Intrinsics K = intrinsics_of(*ctx_);
   const Eigen::Vector3d O = current_.camera_center();
   std::vector<ProjectedPoint> candidates;
@@ -519,6 +538,66 @@ bool Tracker::track_local_map() {
     candidates.push_back({p, static_cast<float>(u), static_cast<float>(v), static_cast<float>(u - K.bf * inv_z),
                           p->predict_level(dist, ctx_->pyramid), static_cast<float>(view_cos)});
   }
+  return candidates;
+}
+
+bool Tracker::local_map_from_nearby_keyframes() {
+  // Keyframes whose camera stood near the frame's and looked the same way, nearest first.
+  const Eigen::Vector3d O = current_.camera_center();
+  const Eigen::Vector3d axis = current_.T_cw.rotation().conjugate().toRotationMatrix().col(2);
+  const double cos_max = std::cos(opt_.nearby_keyframe_max_angle_deg * M_PI / 180.0);
+  std::vector<std::pair<double, std::shared_ptr<KeyFrame>>> near;
+  for (const auto& kf : map_.keyframes()) {
+    if (kf->bad) continue;
+    const double d = (kf->camera_center() - O).norm();
+    if (d > opt_.nearby_keyframe_radius_m) continue;
+    const Eigen::Vector3d kf_axis = kf->pose().rotation().conjugate().toRotationMatrix().col(2);
+    if (kf_axis.dot(axis) < cos_max) continue;
+    near.emplace_back(d, kf);
+  }
+  if (near.empty()) return false;
+  std::sort(near.begin(), near.end(), [](const auto& a, const auto& b) {
+    return a.first < b.first || (a.first == b.first && a.second->id < b.second->id);
+  });
+  if (near.size() > opt_.nearby_keyframes) near.resize(opt_.nearby_keyframes);
+  local_keyframes_.clear();
+  for (const auto& [d, kf] : near) {
+    kf->local_map_mark = current_.id;
+    local_keyframes_.push_back(kf);
+  }
+  reference_ = near.front().second;
+  current_.reference = reference_;
+  local_points_.clear();
+  for (const auto& kf : local_keyframes_) {
+    for (const auto& p : kf->points) {
+      if (!p || p->bad || p->local_map_mark == current_.id) continue;
+      p->local_map_mark = current_.id;
+      local_points_.push_back(p);
+    }
+  }
+  return true;
+}
+
+bool Tracker::track_local_map() {
+  update_local_map();
+  // Points already matched are visible; do not search them again.
+  for (auto& p : current_.points) {
+    if (!p) continue;
+    if (p->bad) {
+      p = nullptr;
+      continue;
+    }
+    ++p->visible;
+    p->track_mark = current_.id;  // already matched in this frame
+  }
+  auto candidates = project_local_points();
+  // Localization mode: the local map comes from the keyframes that share the frame's matched
+  // map points, so after a stretch on visual odometry alone (a plain wall, a turn) it still
+  // holds the keyframes of the place the camera left and nothing of it is in view. No new
+  // keyframe will replace them as in SLAM mode: take the keyframes around the frame's pose.
+  if (!keyframe_creation_ && static_cast<int>(candidates.size()) < opt_.min_local_map_inliers &&
+      local_map_from_nearby_keyframes())
+    candidates = project_local_points();
   search_local_points(current_, candidates, opt_.local_map_radius);
   PoseOptimizerOptions po = pose_options();
   if (auto prior = depth_prior()) po.priors.push_back(*prior);

@@ -17,6 +17,7 @@
 #include "core/stage_timer.hpp"
 #include "slam/depth_odometry.hpp"
 #include "slam/frame.hpp"
+#include "slam/matcher.hpp"
 #include "slam/pose_optimizer.hpp"
 
 namespace builtscene::slam {
@@ -63,9 +64,16 @@ struct TrackingOptions {
   // floor's depth tell them apart. Only after a frame with fewer local-map inliers than
   // depth_prior_below_inliers (0 = every frame): where the features are many the prior's
   // own errors (depth not registered to colour on real sensors) cost more than it gives.
-  // Measured: docs/slam.md, "The depth prior".
+  // Measured: docs/slam.md, "The depth prior". Localization mode makes no keyframes: there
+  // the last frame's depth is the reference, and only while the last frame matched at least
+  // min_local_map_inliers map points (docs/slam.md, "Localization in a long corridor").
   double depth_prior_weight = 0.1;
   int depth_prior_below_inliers = 100;
+  // Localization mode, when the covisible local map has too few points in view: the nearest
+  // keyframes within this radius whose optical axes are within this angle of the frame's.
+  double nearby_keyframe_radius_m = 3.0;
+  double nearby_keyframe_max_angle_deg = 45.0;
+  std::size_t nearby_keyframes = 20;
 };
 
 enum class TrackingState { kNotInitialized, kOk, kLost };
@@ -146,6 +154,8 @@ class Tracker {
   long depth_odometry_prior_frames() const;
   // Ids of the frames where tracking resumed through relocalization.
   const std::vector<long>& relocalized_frames() const { return relocalized_frames_; }
+  // Localization mode: frames on visual odometry whose pose came from relocalization instead.
+  long odometry_relocalizations() const { return odometry_relocalizations_; }
 
  private:
   std::shared_ptr<const FrameContext> ctx_;
@@ -175,6 +185,7 @@ class Tracker {
   RelocalizationHook relocalization_hook_;
   const Relocalizer* relocalizer_ = nullptr;
   std::vector<long> relocalized_frames_;
+  long odometry_relocalizations_ = 0;
   std::unique_ptr<DepthOdometry> depth_odometry_;
   bool depth_odometry_on_ = true;
   cv::Mat gray_, depth_, last_gray_, last_depth_;  // this frame's and the last tracked frame's images
@@ -192,6 +203,8 @@ class Tracker {
   bool recover_near_reference();  // lost: the reference, then nearby and newest keyframes
   bool track_local_map();
   void update_local_map();
+  std::vector<ProjectedPoint> project_local_points();  // local points in view, marked visible
+  bool local_map_from_nearby_keyframes();  // localization mode: see track_local_map()
   int discard_outliers();  // returns matches to real map points
   PoseOptimizerOptions pose_options() const;
   // Matches and inliers of the current frame, for TrackingOutcome's ratios.

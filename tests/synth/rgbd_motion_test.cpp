@@ -4,6 +4,7 @@
 #include <numbers>
 
 #include "synth/camera_motion.hpp"
+#include "synth/rgbd_sequence_writer.hpp"
 #include "synth/scene_library.hpp"
 #include "synth/truth_map.hpp"
 
@@ -89,5 +90,46 @@ TEST(RgbdMotion, HandheldStaysFreeLooksAtThingsAndTurnsFastSometimes) {
     EXPECT_GT(res.fast_turns, 0) << name;
     EXPECT_GT(max_rate, 1.5) << name << ": a fast turn exceeds ~90 deg/s";
     EXPECT_LT(max_rate, 6.0) << name;
+  }
+}
+
+// The source's marker experiment measures every floor marker while the robot drives the loop:
+// each one must come into the forward camera's view (all four corners in the image, 1-4 m
+// away, no wall between: the walls of the 0.5-1.5 m band on the line of sight) on a good
+// number of frames. Computed from the path and the scene's geometry, no render.
+TEST(RgbdMotion, EveryCorridorMarkerComesIntoTheRobotCamerasView) {
+  const synth::Scene scene = synth::build_scene("corridor-loop");
+  synth::MotionOptions mo;
+  mo.kind = synth::MotionKind::Robot;
+  const auto res = synth::generate_motion(scene, mo);
+  const auto cam = synth::kinect_settings().camera;
+  const auto walls = synth::compute_truth_map(scene, 0.5, 1.5);
+  auto wall_between = [&](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+    const double len = (b - a).head<2>().norm();
+    for (double s = 0; s < len; s += 0.02) {
+      const Eigen::Vector3d p = a + (b - a) * (s / len);
+      if (walls.value_at(p.x(), p.y()) == 100) return true;
+    }
+    return false;
+  };
+  ASSERT_EQ(scene.tags.size(), 15u);
+  for (const auto& tag : scene.tags) {
+    int frames_in_view = 0;
+    for (const auto& T_wc : res.poses) {
+      const bs::SE3 T_cw = T_wc.inverse();
+      bool in_view = true;
+      for (const auto& corner : tag.corners()) {
+        const Eigen::Vector3d pc = T_cw * corner;
+        const Eigen::Vector2d uv = cam.project(pc);
+        if (pc.z() < 1.0 || pc.norm() > 4.0 || uv.x() < 0 || uv.y() < 0 || uv.x() >= cam.width || uv.y() >= cam.height ||
+            wall_between(T_wc.translation(), corner)) {
+          in_view = false;
+          break;
+        }
+      }
+      frames_in_view += in_view;
+    }
+    std::printf("tag %d: %d frames in view\n", tag.id, frames_in_view);
+    EXPECT_GE(frames_in_view, 20) << "tag " << tag.id << " at " << tag.center.transpose();
   }
 }
