@@ -31,6 +31,7 @@ namespace {
 struct LocalizeOptions {
   std::filesystem::path dataset, camera, map, trajectory, vocabulary;
   long max_frames = 0;
+  std::optional<double> planar_pitch_deg;  // --planar-motion
   LocalizeOutputOptions outputs;
   DescriptorOptions features;
 };
@@ -41,6 +42,7 @@ nlohmann::json run_localize(const LocalizeOptions& opt) {
   slam::SystemOptions so;
   so.orb = OrbExtractorOptions::from_settings(SettingsFile::load(camera_file));
   so.vocabulary = opt.vocabulary;
+  if (opt.planar_pitch_deg) so.planar = slam::PlanarMotion::from_pitch(*opt.planar_pitch_deg);
   opt.features.apply(so);
   opt.features.check_outputs();
   check_output_file(opt.trajectory);
@@ -129,6 +131,10 @@ const bool registered_localize = register_command({
       cmd.add_option("--camera", opt->camera, "Camera settings (default DATASET/camera.yaml)");
       cmd.add_option("--trajectory", opt->trajectory, "Output: TUM trajectory of the tracked frames");
       cmd.add_option("--max-frames", opt->max_frames, "Only the first N frames (0 = all)");
+      cmd.add_option("--planar-motion", opt->planar_pitch_deg,
+                     "Ground robot: the camera keeps its height and tilt over a flat floor; its pitch below the "
+                     "horizontal in degrees (as the map was built with)")
+          ->check(CLI::Range(-89.0, 89.0));
       cmd.add_option("--vocabulary", opt->vocabulary,
                      "Bag-of-words vocabulary (default: the shipped one; must be the map's)");
       opt->outputs.add_to(cmd);

@@ -2,6 +2,7 @@
 // tracked frame and the keyframe trajectory (TUM format); optionally starts from a saved map
 // (--map-in), saves the map (--map-out), and switches between SLAM and localization mode by
 // frame range (--mode-schedule) or by region on the ground plane (--slam-region).
+#include <optional>
 #include <chrono>
 #include <cmath>
 #include <fstream>
@@ -43,6 +44,7 @@ struct SlamOptions {
   double motion_prior_cm = 0, motion_prior_deg = 0.3;
   double depth_prior = slam::TrackingOptions{}.depth_prior_weight;
   int depth_prior_below = slam::TrackingOptions{}.depth_prior_below_inliers;
+  std::optional<double> planar_pitch_deg;  // --planar-motion
   SlamOgmOptions ogm;
   DescriptorOptions features;
 };
@@ -82,6 +84,7 @@ nlohmann::json run_slam(const SlamOptions& opt) {
   so.tracking.depth_link_weight = opt.depth_link_weight;
   so.tracking.depth_prior_weight = opt.depth_prior;
   so.tracking.depth_prior_below_inliers = opt.depth_prior_below;
+  if (opt.planar_pitch_deg) so.planar = slam::PlanarMotion::from_pitch(*opt.planar_pitch_deg);
   if (opt.motion_prior_cm > 0) {
     so.tracking.motion_prior = true;
     so.tracking.motion_prior_sigma_m = opt.motion_prior_cm / 100.0;
@@ -299,6 +302,10 @@ const bool registered_slam = register_command({
                      "information times this weight, where features are few (0 = off; docs/slam.md)")
           ->capture_default_str()
           ->check(CLI::Range(0.0, 1e6));
+      cmd.add_option("--planar-motion", opt->planar_pitch_deg,
+                     "Ground robot: the camera keeps its height and tilt over a flat floor; its pitch below the "
+                     "horizontal in degrees (docs/slam.md, \"Planar motion\")")
+          ->check(CLI::Range(-89.0, 89.0));
       cmd.add_option("--depth-prior-below", opt->depth_prior_below,
                      "... only after a frame with fewer map inliers than this (0 = every frame)")
           ->capture_default_str()

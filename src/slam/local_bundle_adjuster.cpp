@@ -136,6 +136,12 @@ BundleAdjustmentResult solve_bundle_adjustment(const BundleAdjustmentProblem& pb
                                nullptr, &poses[6 * i], &poses[6 * j]);
       camera_used[i] = camera_used[j] = 1;
     }
+    if (pb.planar.enabled)
+      for (std::size_t c = 0; c < nc; ++c)
+        if (camera_used[c] && !pb.cameras[c].fixed)
+          problem.AddResidualBlock(new ceres::AutoDiffCostFunction<PlanarMotionCost, 4, 6>(new PlanarMotionCost{
+                                       pb.planar.up_c, 1.0 / pb.planar.sigma_m, 1.0 / pb.planar.sigma_rad}),
+                                   nullptr, &poses[6 * c]);
     for (std::size_t c = 0; c < nc; ++c)
       if (camera_used[c] && pb.cameras[c].fixed) problem.SetParameterBlockConstant(&poses[6 * c]);
     if (problem.NumResidualBlocks() == 0) break;

@@ -12,6 +12,7 @@
 
 #include "core/se3.hpp"
 #include "slam/observation.hpp"
+#include "slam/planar_motion.hpp"
 
 namespace builtscene::slam {
 
@@ -37,6 +38,8 @@ struct BundleAdjustmentProblem {
     Eigen::Matrix<double, 6, 6> information;
   };
   std::vector<RelativePose> relative_poses;
+  // A ground robot's planar motion (planar_motion.hpp): a term on every free camera.
+  PlanarMotion planar;
 };
 
 struct BundleAdjustmentOptions {

@@ -391,6 +391,7 @@ void LocalMapping::fuse_with_neighbours(KeyFrame& kf) {
 
 void LocalMapping::local_bundle_adjustment(KeyFrame& kf) {
   BundleAdjustmentProblem pb;
+  pb.planar = opt_.planar;
   std::vector<std::shared_ptr<KeyFrame>> cams;
   std::vector<std::shared_ptr<MapPoint>> pts;
   struct Link {

@@ -461,6 +461,7 @@ void LoopCloser::correct(const std::shared_ptr<KeyFrame>& kf, const LoopMatch& m
 void LoopCloser::run_global_ba(long loop, long keyframe, long matched) {
   const auto start = std::chrono::steady_clock::now();
   BundleAdjustmentProblem pb;
+  pb.planar = opt_.planar;
   std::vector<std::shared_ptr<KeyFrame>> cams;
   std::vector<std::shared_ptr<MapPoint>> pts;
   {

@@ -46,6 +46,7 @@ class KeyFrameDatabase;
 class LocalMapping;
 
 struct LoopClosingOptions {
+  PlanarMotion planar;  // a ground robot's planar motion in global BA (planar_motion.hpp)
   int min_keyframes = 10;       // map size before loops are searched, and keyframes between two loops (ORB-SLAM2)
   int min_keyframe_gap = 20;    // candidates at least this many keyframe ids older (not the recent past)
   int consistency = 3;          // ORB-SLAM2's covisibility consistency threshold

@@ -32,6 +32,7 @@ System::System(const RgbdCameraSettings& settings, SystemOptions options)
     saft_ = static_cast<SaftExtractor*>(extractor_.get());
     learning_ = std::make_unique<SaftLearning>(*saft_, options_.saft_learning);
   }
+  options_.tracking.planar = options_.mapping.planar = options_.loop.planar = options_.planar;
   options_.tracking.max_frames_between_kf = std::max(1, static_cast<int>(std::lround(settings_.fps)));
   mapping_ = std::make_unique<LocalMapping>(map_, options_.mapping, &timer_);
   tracker_ = std::make_unique<Tracker>(ctx_, map_, mapping_.get(), options_.tracking, &timer_);

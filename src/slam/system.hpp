@@ -65,6 +65,9 @@ struct SystemOptions {
   // local mapping, global BA included (deterministic).
   bool loop_closing = true;
   LoopClosingOptions loop;
+  // A ground robot's planar motion (planar_motion.hpp), off by default; System copies it into
+  // the tracking, local mapping and loop closing options.
+  PlanarMotion planar;
 };
 
 // A fingerprint of a vocabulary, stored in saved maps (never 0).

@@ -601,6 +601,7 @@ bool Tracker::track_local_map() {
   search_local_points(current_, candidates, opt_.local_map_radius);
   PoseOptimizerOptions po = pose_options();
   if (auto prior = depth_prior()) po.priors.push_back(*prior);
+  if (opt_.planar.enabled) po.priors.push_back(planar_prior(opt_.planar, current_.T_cw));
   optimize_frame_pose(current_, po);
   local_map_counts_ = match_counts();
   inliers_ = odometry_inliers_ = 0;

@@ -18,6 +18,7 @@
 #include "slam/depth_odometry.hpp"
 #include "slam/frame.hpp"
 #include "slam/matcher.hpp"
+#include "slam/planar_motion.hpp"
 #include "slam/pose_optimizer.hpp"
 
 namespace builtscene::slam {
@@ -74,6 +75,9 @@ struct TrackingOptions {
   double nearby_keyframe_radius_m = 3.0;
   double nearby_keyframe_max_angle_deg = 45.0;
   std::size_t nearby_keyframes = 20;
+  // A ground robot's planar motion (off by default; planar_motion.hpp): a prior in local-map
+  // tracking's pose optimization.
+  PlanarMotion planar;
 };
 
 enum class TrackingState { kNotInitialized, kOk, kLost };
