@@ -507,6 +507,10 @@ void Tracker::update_local_map() {
     reference_ = best->shared_from_this();
     current_.reference = reference_;
   }
+  collect_local_points();
+}
+
+void Tracker::collect_local_points() {
   local_points_.clear();
   for (const auto& kf : local_keyframes_) {
     for (const auto& p : kf->points) {
@@ -567,14 +571,7 @@ bool Tracker::local_map_from_nearby_keyframes() {
   }
   reference_ = near.front().second;
   current_.reference = reference_;
-  local_points_.clear();
-  for (const auto& kf : local_keyframes_) {
-    for (const auto& p : kf->points) {
-      if (!p || p->bad || p->local_map_mark == current_.id) continue;
-      p->local_map_mark = current_.id;
-      local_points_.push_back(p);
-    }
-  }
+  collect_local_points();
   return true;
 }
 

@@ -207,6 +207,7 @@ class Tracker {
   bool recover_near_reference();  // lost: the reference, then nearby and newest keyframes
   bool track_local_map();
   void update_local_map();
+  void collect_local_points();  // local_points_ from local_keyframes_
   std::vector<ProjectedPoint> project_local_points();  // local points in view, marked visible
   bool local_map_from_nearby_keyframes();  // localization mode: see track_local_map()
   int discard_outliers();  // returns matches to real map points
