@@ -4,6 +4,8 @@
 
 #include <Eigen/Geometry>
 
+#include "slam/reprojection_cost.hpp"
+
 namespace builtscene::slam {
 
 PlanarMotion PlanarMotion::from_pitch(double pitch_deg) {
@@ -16,12 +18,12 @@ PlanarMotion PlanarMotion::from_pitch(double pitch_deg) {
 
 namespace {
 
-// The constraint's residuals (as PlanarMotionCost) at a pose.
+// The constraint's residuals at a pose: PlanarMotionCost itself, on doubles.
 Eigen::Vector4d planar_residual(const PlanarMotion& pm, const Eigen::Matrix3d& R, const Eigen::Vector3d& t) {
-  const Eigen::Vector3d Rn = R * pm.up_c;
+  double block[6];
+  detail::pose_to_block(SE3(R, t), block);
   Eigen::Vector4d r;
-  r[0] = -Rn.dot(t) / pm.sigma_m;
-  r.tail<3>() = (Rn - pm.up_c) / pm.sigma_rad;
+  PlanarMotionCost{pm.up_c, 1.0 / pm.sigma_m, 1.0 / pm.sigma_rad}(block, r.data());
   return r;
 }
 

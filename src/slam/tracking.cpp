@@ -250,18 +250,18 @@ std::optional<PosePrior> Tracker::depth_prior() const {
   // The depth to align to: the newest keyframe's in SLAM mode; in localization mode, where no
   // keyframe is made, the last tracked frame's.
   const cv::Mat* ref_depth = nullptr;
-  SE3 T_kf_cw;
+  SE3 T_ref_cw;
   if (keyframe_creation_) {
     const auto kf = last_kf_.lock();
     if (!kf || kf->bad || last_kf_depth_.empty()) return std::nullopt;
     ref_depth = &last_kf_depth_;
-    T_kf_cw = kf->pose();
+    T_ref_cw = kf->pose();
   } else {
     // Only while the map holds the pose: on visual odometry alone (a plain corridor) the
     // frame-to-frame alignment slides along the walls and drags the pose with it.
     if (!has_last_ || last_depth_.empty() || inliers_ < opt_.min_local_map_inliers) return std::nullopt;
     ref_depth = &last_depth_;
-    T_kf_cw = last_.T_cw;
+    T_ref_cw = last_.T_cw;
   }
   const auto start = std::chrono::steady_clock::now();
   const Intrinsics K = intrinsics_of(*ctx_);
@@ -272,7 +272,7 @@ std::optional<PosePrior> Tracker::depth_prior() const {
   o.max_gap_m = 0.3;
   o.prior_sigma_m = 0.05;  // as the keyframe links: the depth decides where it can
   o.prior_sigma_rad = 0.02;
-  const SE3 predicted = current_.T_cw * T_kf_cw.inverse();
+  const SE3 predicted = current_.T_cw * T_ref_cw.inverse();
   Eigen::Matrix<double, 6, 6> info;  // (translation, rotation) of the left perturbation
   const auto T = icp_with_motion_prior(*ref_depth, depth_, K.fx, K.fy, K.cx, K.cy, predicted, o, &info);
   if (timer_) timer_->add("depth_prior", ms_since(start));
@@ -286,7 +286,7 @@ std::optional<PosePrior> Tracker::depth_prior() const {
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>> es(H);
   if (es.info() != Eigen::Success) return std::nullopt;
   const Eigen::Matrix<double, 6, 1> s = es.eigenvalues().cwiseMax(0.0).cwiseSqrt();
-  return PosePrior{*T * T_kf_cw, s.asDiagonal() * es.eigenvectors().transpose()};
+  return PosePrior{*T * T_ref_cw, s.asDiagonal() * es.eigenvectors().transpose()};
 }
 
 void Tracker::start_lost() {
@@ -538,7 +538,6 @@ std::vector<ProjectedPoint> Tracker::project_local_points() {
     if (dist < 0.8 * p->min_distance || dist > 1.2 * p->max_distance) continue;
     const double view_cos = po.dot(p->normal) / dist;
     if (view_cos < 0.5) continue;
-    ++p->visible;
     candidates.push_back({p, static_cast<float>(u), static_cast<float>(v), static_cast<float>(u - K.bf * inv_z),
                           p->predict_level(dist, ctx_->pyramid), static_cast<float>(view_cos)});
   }
@@ -548,15 +547,15 @@ std::vector<ProjectedPoint> Tracker::project_local_points() {
 bool Tracker::local_map_from_nearby_keyframes() {
   // Keyframes whose camera stood near the frame's and looked the same way, nearest first.
   const Eigen::Vector3d O = current_.camera_center();
-  const Eigen::Vector3d axis = current_.T_cw.rotation().conjugate().toRotationMatrix().col(2);
+  auto optical_axis = [](const SE3& T_cw) { return (T_cw.rotation().conjugate() * Eigen::Vector3d::UnitZ()).eval(); };
+  const Eigen::Vector3d axis = optical_axis(current_.T_cw);
   const double cos_max = std::cos(opt_.nearby_keyframe_max_angle_deg * M_PI / 180.0);
   std::vector<std::pair<double, std::shared_ptr<KeyFrame>>> near;
   for (const auto& kf : map_.keyframes()) {
     if (kf->bad) continue;
     const double d = (kf->camera_center() - O).norm();
     if (d > opt_.nearby_keyframe_radius_m) continue;
-    const Eigen::Vector3d kf_axis = kf->pose().rotation().conjugate().toRotationMatrix().col(2);
-    if (kf_axis.dot(axis) < cos_max) continue;
+    if (optical_axis(kf->pose()).dot(axis) < cos_max) continue;
     near.emplace_back(d, kf);
   }
   if (near.empty()) return false;
@@ -595,6 +594,7 @@ bool Tracker::track_local_map() {
   if (!keyframe_creation_ && static_cast<int>(candidates.size()) < opt_.min_local_map_inliers &&
       local_map_from_nearby_keyframes())
     candidates = project_local_points();
+  for (const auto& c : candidates) ++c.point->visible;
   search_local_points(current_, candidates, opt_.local_map_radius);
   PoseOptimizerOptions po = pose_options();
   if (auto prior = depth_prior()) po.priors.push_back(*prior);

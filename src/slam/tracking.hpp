@@ -208,7 +208,7 @@ class Tracker {
   bool track_local_map();
   void update_local_map();
   void collect_local_points();  // local_points_ from local_keyframes_
-  std::vector<ProjectedPoint> project_local_points();  // local points in view, marked visible
+  std::vector<ProjectedPoint> project_local_points();  // local points in view (not yet counted visible)
   bool local_map_from_nearby_keyframes();  // localization mode: see track_local_map()
   int discard_outliers();  // returns matches to real map points
   PoseOptimizerOptions pose_options() const;
