@@ -8,6 +8,7 @@
 #include <set>
 #include <sstream>
 
+#include <Eigen/Eigenvalues>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -24,6 +25,36 @@ MarkerAlignment parse_marker_alignment(const std::string& name) {
 }
 
 static double horizontal(const Eigen::Vector3d& a, const Eigen::Vector3d& b) { return (a - b).head<2>().norm(); }
+
+namespace {
+struct FloorUp {
+  Eigen::Vector3d axis = Eigen::Vector3d::UnitZ();
+  bool from_markers = false;
+};
+}  // namespace
+
+// The map frame's up axis: the normal of the plane through the measured floor markers,
+// pointing the way the truth's z points under the best 3D rigid fit (a plane's normal has no
+// sign of its own). Fewer than 3 markers, or markers on a line: the map's own z.
+static FloorUp floor_up(const std::vector<Eigen::Vector3d>& src, const std::vector<Eigen::Vector3d>& dst) {
+  FloorUp up;
+  if (src.size() < 3) return up;
+  Eigen::Vector3d c = Eigen::Vector3d::Zero();
+  for (const auto& p : src) c += p;
+  c /= static_cast<double>(src.size());
+  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+  for (const auto& p : src) cov += (p - c) * (p - c).transpose();
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(cov);
+  const Eigen::Vector3d ev = es.eigenvalues();  // ascending
+  // On a line the second-largest spread vanishes and the plane is undetermined.
+  if (!(ev(1) > 1e-6 * ev(2)) || ev(2) <= 0) return up;
+  Eigen::Vector3d n = es.eigenvectors().col(0);
+  const Sim3 fit = umeyama_alignment(src, dst, false);
+  if (n.dot(fit.rotation().inverse() * Eigen::Vector3d::UnitZ()) < 0) n = -n;
+  up.axis = n.normalized();
+  up.from_markers = true;
+  return up;
+}
 
 MarkerEvaluation evaluate_markers(const std::vector<MarkerMeasurement>& measured, const std::vector<MarkerTruth>& truth,
                                   MarkerAlignment alignment) {
@@ -59,17 +90,27 @@ MarkerEvaluation evaluate_markers(const std::vector<MarkerMeasurement>& measured
     if (src.size() < 2)
       throw InputError("marker alignment (2d) needs at least 2 measured markers that the truth lists, got " +
                        std::to_string(src.size()));
-    // A rotation about z and a planar translation: align the floor projections, each point
-    // lifted by a unit z copy so that the 3D solver cannot tilt the plane.
+    // The map frame need not be z-up (a SLAM world is its first camera: y down, the floor in
+    // x-z). The floor markers lie on the floor, so the plane through their mean positions
+    // gives the map's up axis; it is turned onto the truth's z, then a rotation about z and a
+    // planar translation align the floor projections.
+    const FloorUp up = floor_up(src, dst);
+    e.up_from_markers = up.from_markers;
+    const Eigen::Quaterniond level = Eigen::Quaterniond::FromTwoVectors(up.axis, Eigen::Vector3d::UnitZ());
     std::vector<Eigen::Vector3d> s2, d2;
+    double dz = 0;
     for (std::size_t i = 0; i < src.size(); ++i) {
-      s2.emplace_back(src[i].x(), src[i].y(), 0);
+      const Eigen::Vector3d l = level * src[i];
+      dz += (dst[i].z() - l.z()) / static_cast<double>(src.size());
+      // Each point lifted by a unit z copy so that the 3D solver cannot tilt the plane.
+      s2.emplace_back(l.x(), l.y(), 0);
       d2.emplace_back(dst[i].x(), dst[i].y(), 0);
-      s2.emplace_back(src[i].x(), src[i].y(), 1);
+      s2.emplace_back(l.x(), l.y(), 1);
       d2.emplace_back(dst[i].x(), dst[i].y(), 1);
     }
     const Sim3 a = umeyama_alignment(s2, d2, false);
-    e.map_to_truth = Sim3(a.rotation(), Eigen::Vector3d(a.translation().x(), a.translation().y(), 0), 1.0);
+    e.map_to_truth = Sim3(a.rotation(), Eigen::Vector3d(a.translation().x(), a.translation().y(), dz), 1.0) *
+                     Sim3(level, Eigen::Vector3d::Zero(), 1.0);
   }
   std::map<int, std::vector<Eigen::Vector3d>> aligned;
   for (const auto& [id, ps] : raw)
@@ -179,7 +220,10 @@ nlohmann::json to_json(const MarkerEvaluation& e) {
           {"unknown_ids", e.unknown_ids},
           {"unseen_ids", e.unseen_ids},
           {"alignment", e.alignment == MarkerAlignment::k3D ? "3d" : e.alignment == MarkerAlignment::k2D ? "2d" : "none"},
-          {"map_to_truth", {{"t", {t.x(), t.y(), t.z()}}, {"q_xyzw", {q.x(), q.y(), q.z(), q.w()}}}}};
+          {"map_to_truth", {{"t", {t.x(), t.y(), t.z()}}, {"q_xyzw", {q.x(), q.y(), q.z(), q.w()}}}},
+          {"map_up", e.alignment != MarkerAlignment::k2D ? nlohmann::json(nullptr)
+                     : e.up_from_markers                 ? nlohmann::json("markers_plane")
+                                                         : nlohmann::json("z")}};
 }
 
 void write_marker_tables(const MarkerEvaluation& e, const std::filesystem::path& dir) {

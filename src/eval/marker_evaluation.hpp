@@ -1,7 +1,8 @@
 #pragma once
 // Marker-based accuracy evaluation (the source's section 2.5): the map frame is aligned to the
 // surveyed markers' frame by the best rigid transform over all markers' mean positions (3D, or
-// 2D on the floor plane), then per marker: times measured, mean estimated and true X and Y,
+// 2D on the floor plane: the map's up axis from the plane through the measured floor markers,
+// the truth's up axis z), then per marker: times measured, mean estimated and true X and Y,
 // the position RMSE over all measurements (horizontal, as the source's Table 2.1) and the
 // spread (repeatability); and for consecutive markers (and the closing pair) the distance
 // RMSE over all pairs of their measurements (Table 2.2).
@@ -42,6 +43,7 @@ struct MarkerEvaluation {
   std::vector<int> unseen_ids;                // true markers never measured
   MarkerAlignment alignment = MarkerAlignment::k3D;
   Sim3 map_to_truth;
+  bool up_from_markers = false;               // 2d: the map's up axis is the markers' plane (else its z)
   std::size_t measurements_used = 0;
   double max_rmse = 0, max_distance_rmse = 0;
 };

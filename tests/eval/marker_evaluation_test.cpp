@@ -67,6 +67,41 @@ TEST(MarkerEvaluation, ClosedFormRmseAndDistanceRmseUnderAKnownMapTransform) {
   EXPECT_LT((e.map_to_truth.matrix() - T.inverse().matrix()).norm(), 1e-9);
 }
 
+// The 2D evaluation in a SLAM world (y down, floor in x-z): the up axis comes from the plane
+// of the floor markers, so the horizontal errors are the ones put in, and a height error
+// (the map's up axis) costs nothing horizontally.
+TEST(MarkerEvaluation, TwoDimensionalAlignmentFindsTheFloorOfACameraFrameMap) {
+  const auto truth = loop_markers();
+  const SE3 T = truth_to_map();
+  std::vector<MarkerMeasurement> ms;
+  std::size_t frame = 0;
+  for (const auto& t : truth)
+    for (int k = 0; k < 4; ++k) {
+      Eigen::Vector3d p = t.position;
+      if (t.id == 1) p.x() += (k % 2 ? 0.05 : -0.05);   // horizontal: RMSE 0.05
+      if (t.id == 8) p.z() += (k % 2 ? 0.03 : -0.03);   // vertical only: no horizontal error
+      ms.push_back({frame++, 0.1 * static_cast<double>(frame), t.id, T * p, 2.0, 10});
+    }
+  const auto e = evaluate_markers(ms, truth, MarkerAlignment::k2D);
+  EXPECT_TRUE(e.up_from_markers);
+  ASSERT_EQ(e.markers.size(), 15u);
+  EXPECT_NEAR(e.markers[0].rmse, 0.05, 1e-9);
+  for (std::size_t i = 1; i < 15; ++i) EXPECT_NEAR(e.markers[i].rmse, 0.0, 1e-9) << "marker " << i + 1;
+  EXPECT_NEAR(e.markers[7].rmse_3d, 0.03, 1e-9);
+  EXPECT_NEAR(e.max_rmse, 0.05, 1e-9);
+  EXPECT_LT((e.map_to_truth.matrix() - T.inverse().matrix()).norm(), 1e-9);
+  EXPECT_EQ(to_json(e)["map_up"], "markers_plane");
+
+  // Markers on a line leave the plane open: the map's own z is taken as up (z-up map).
+  std::vector<MarkerMeasurement> line;
+  for (const auto& m : ms)
+    if (m.id <= 5) line.push_back({m.frame, m.time, m.id, T.inverse() * m.position + Eigen::Vector3d(1, 2, 0), 2.0, 10});
+  const auto l = evaluate_markers(line, truth, MarkerAlignment::k2D);
+  EXPECT_FALSE(l.up_from_markers);
+  EXPECT_NEAR(l.markers[0].rmse, 0.05, 1e-9);
+  for (std::size_t i = 1; i < 5; ++i) EXPECT_NEAR(l.markers[i].rmse, 0.0, 1e-9);
+}
+
 TEST(MarkerEvaluation, UnknownUnseenAndTooFewMarkers) {
   const auto truth = loop_markers();
   // Markers 1-3 measured where they are, and an id the survey does not list.
