@@ -243,6 +243,13 @@ nlohmann::json run_slam(const SlamOptions& opt) {
       {"trajectory_poses", traj.size()},
   };
   if (ogm) j["ogm"] = ogm_summary;
+  if (system.planar().enabled) {
+    const auto& up = system.planar().up_c;
+    const auto& floor = system.floor_plane();
+    j["planar_motion"] = {{"up_c", {up.x(), up.y(), up.z()}},
+                          {"from", floor ? "floor" : "pitch"},
+                          {"floor_height_m", floor ? nlohmann::json(floor->height_m) : nlohmann::json(nullptr)}};
+  }
   spdlog::info("slam: {} frames, {} tracked, {} lost, {} keyframes, {} map points, {:.1f} fps", n, tracked,
                lost + not_initialized, system.keyframe_count(), system.map_point_count(), j["fps"].get<double>());
   return j;

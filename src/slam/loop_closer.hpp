@@ -105,6 +105,8 @@ class LoopCloser {
   // Called in the loop-closing thread (or the global-BA thread, or the caller's thread in
   // inline mode), without the map lock; keep it short. Set before start().
   void set_event_sink(EventSink sink) { sink_ = std::move(sink); }
+  // Before the first keyframe is inserted (the queue orders it before any use in BA).
+  void set_planar(const PlanarMotion& planar) { opt_.planar = planar; }
 
   void start();
   void insert_keyframe(std::shared_ptr<KeyFrame> kf);

@@ -8,6 +8,7 @@
 #include "core/errors.hpp"
 #include "core/logging.hpp"
 #include "features/bow_vocabulary.hpp"
+#include "slam/floor_plane.hpp"
 #include "slam/key_frame.hpp"
 #include "slam/keyframe_database.hpp"
 #include "slam/relocalizer.hpp"
@@ -87,6 +88,7 @@ TrackingOutcome System::track_rgbd(const cv::Mat& image, const cv::Mat& depth_m,
   const int keypoints = static_cast<int>(features->size());
   const long frame_id = next_frame_id_++;
   Frame frame(frame_id, timestamp, std::move(features));
+  if (options_.planar.enabled && !floor_checked_) floor_from_first_frame(depth_m);
   tracker_->set_images(gray, depth_m);
   TrackingOutcome out = tracker_->track(std::move(frame));
   out.keypoints = keypoints;
@@ -127,6 +129,27 @@ TrackingOutcome System::track_rgbd(const cv::Mat& image, const cv::Mat& depth_m,
   timer_.add("tracking", ms_since(t0));
   timer_.add("frame", ms_since(start));
   return out;
+}
+
+void System::floor_from_first_frame(const cv::Mat& depth_m) {
+  floor_checked_ = true;
+  {
+    std::lock_guard lock(map_.mutex());
+    if (map_.keyframe_count() > 0) return;  // a loaded map: its world was fixed by another run
+  }
+  const Eigen::Vector3d guess = options_.planar.up_c;
+  floor_ = estimate_floor_plane(depth_m, settings_.camera, guess);
+  if (!floor_) {
+    spdlog::warn("planar motion: no floor in the first frame's depth; the plane comes from the given pitch");
+    return;
+  }
+  options_.planar.up_c = floor_->up_c;
+  tracker_->set_planar(options_.planar);
+  mapping_->set_planar(options_.planar);
+  if (loop_closer_) loop_closer_->set_planar(options_.planar);
+  spdlog::info("planar motion: floor {:.3f} m below the first camera, {:.2f} degrees from the given pitch ({} points)",
+               floor_->height_m, std::acos(std::clamp(floor_->up_c.dot(guess), -1.0, 1.0)) * 180 / M_PI,
+               floor_->inliers);
 }
 
 void System::shutdown() {

@@ -31,6 +31,7 @@
 #include "features/orb_extractor.hpp"
 #include "io/trajectory.hpp"
 #include "slam/local_mapping.hpp"
+#include "slam/floor_plane.hpp"
 #include "slam/loop_closer.hpp"
 #include "slam/loop_event.hpp"
 #include "slam/map.hpp"
@@ -107,6 +108,10 @@ class System {
   void set_mode(Mode mode, const std::string& reason = "api");
   Mode mode() const { return mode_; }
   const std::vector<ModeSwitch>& mode_switches() const { return mode_switches_; }
+  // Planar motion (SystemOptions::planar): its floor normal is measured in the first frame of
+  // a new map when that frame sees the floor (floor_plane.hpp), else taken from the pitch.
+  const PlanarMotion& planar() const { return options_.planar; }
+  const std::optional<FloorPlane>& floor_plane() const { return floor_; }
   // Test hook tried before the relocalizer on lost frames (see Tracker::set_relocalization_hook).
   void set_relocalization_hook(Tracker::RelocalizationHook hook) { tracker_->set_relocalization_hook(std::move(hook)); }
   long first_relocalized_frame() const {  // -1: none yet
@@ -177,8 +182,11 @@ class System {
   std::vector<LoopEvent> events_;
   std::vector<LoopEventSubscriber> subscribers_;
   void on_loop_event(const LoopEvent& event);
+  void floor_from_first_frame(const cv::Mat& depth_m);
   long next_frame_id_ = 0;
   bool shut_down_ = false;
+  bool floor_checked_ = false;
+  std::optional<FloorPlane> floor_;  // planar motion's floor, from the first frame of a new map
   Mode mode_ = Mode::kSlam;
   std::vector<ModeSwitch> mode_switches_;
   double last_timestamp_ = 0;

@@ -144,6 +144,7 @@ class Tracker {
   // When set, a lost frame is relocalized against the whole map (BoW candidates, EPnP)
   // instead of matched against the last reference keyframe only. Not owned.
   void set_relocalizer(const Relocalizer* relocalizer) { relocalizer_ = relocalizer; }
+  void set_planar(const PlanarMotion& planar) { opt_.planar = planar; }
   // The images of the frame about to be tracked (gray CV_8U, depth CV_32F metres), for the
   // depth-odometry bridge; without them (or with `enable_depth_odometry(false)`) it is off.
   void set_images(const cv::Mat& gray, const cv::Mat& depth) {
