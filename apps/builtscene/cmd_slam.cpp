@@ -44,6 +44,7 @@ struct SlamOptions {
   double motion_prior_cm = 0, motion_prior_deg = 0.3;
   double depth_prior = slam::TrackingOptions{}.depth_prior_weight;
   int depth_prior_below = slam::TrackingOptions{}.depth_prior_below_inliers;
+  int bridge_local_map = -1;  // --bridge-local-map
   std::optional<double> planar_pitch_deg;  // --planar-motion
   SlamOgmOptions ogm;
   DescriptorOptions features;
@@ -84,6 +85,7 @@ nlohmann::json run_slam(const SlamOptions& opt) {
   so.tracking.depth_link_weight = opt.depth_link_weight;
   so.tracking.depth_prior_weight = opt.depth_prior;
   so.tracking.depth_prior_below_inliers = opt.depth_prior_below;
+  so.tracking.bridge_local_map_inliers = opt.bridge_local_map;
   if (opt.planar_pitch_deg) so.planar = slam::PlanarMotion::from_pitch(*opt.planar_pitch_deg);
   if (opt.motion_prior_cm > 0) {
     so.tracking.motion_prior = true;
@@ -313,6 +315,11 @@ const bool registered_slam = register_command({
                      "Ground robot: the camera keeps its height and tilt over a flat floor; its pitch below the "
                      "horizontal in degrees (docs/slam.md, \"Planar motion\")")
           ->check(CLI::Range(-89.0, 89.0));
+      cmd.add_option("--bridge-local-map", opt->bridge_local_map,
+                     "After a frame the depth odometry carried, search the local map from its pose and keep the "
+                     "result when it has this many map inliers (0 = off; default: 10 with --planar-motion, else off; "
+                     "docs/slam.md)")
+          ->check(CLI::Range(0, 1000));
       cmd.add_option("--depth-prior-below", opt->depth_prior_below,
                      "... only after a frame with fewer map inliers than this (0 = every frame)")
           ->capture_default_str()

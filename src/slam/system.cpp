@@ -34,6 +34,11 @@ System::System(const RgbdCameraSettings& settings, SystemOptions options)
     learning_ = std::make_unique<SaftLearning>(*saft_, options_.saft_learning);
   }
   options_.tracking.planar = options_.mapping.planar = options_.loop.planar = options_.planar;
+  // Planar motion's priors leave the corridor's plain start a few inliers short of the map,
+  // and without the local map searched from the depth bridge's pose it never gets back
+  // (docs/slam.md, "Planar motion").
+  if (options_.tracking.bridge_local_map_inliers < 0)
+    options_.tracking.bridge_local_map_inliers = options_.planar.enabled ? 10 : 0;
   options_.tracking.max_frames_between_kf = std::max(1, static_cast<int>(std::lround(settings_.fps)));
   mapping_ = std::make_unique<LocalMapping>(map_, options_.mapping, &timer_);
   tracker_ = std::make_unique<Tracker>(ctx_, map_, mapping_.get(), options_.tracking, &timer_);

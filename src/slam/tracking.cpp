@@ -130,10 +130,13 @@ TrackingOutcome Tracker::track(Frame frame) {
     // make a keyframe at once, so new map points from depth are there when texture returns.
     bool by_depth = false;
     if (!ok && was_ok && track_depth_odometry()) {
-      ok = by_depth = true;
+      ok = true;
       bridged_ = keyframe_creation_;
-      inliers_ = 0;
-      ++depth_odometry_frames_;
+      if (!refine_depth_odometry_with_local_map()) {
+        by_depth = true;
+        inliers_ = 0;
+        ++depth_odometry_frames_;
+      }
     }
     weak_ = ok && inliers_ < opt_.weak_tracking_inliers;
     state_ = ok ? TrackingState::kOk : TrackingState::kLost;
@@ -220,6 +223,27 @@ bool Tracker::track_depth_odometry() {
   current_.clear_matches();
   current_.set_pose(*T_cur_last * last_.T_cw);
   return true;
+}
+
+bool Tracker::refine_depth_odometry_with_local_map() {
+  // The depth odometry's pose is measured, not extrapolated: the local map is searched from
+  // it. The far map points (an end wall's poster beyond the depth's range) are what the
+  // motion model lost, and a keyframe that shares them keeps the bridge tied to the map;
+  // without them every bridge keyframe holds only the few close points of a plain corridor
+  // and the motion model never finds its 20 matches again.
+  const int min_inliers = opt_.bridge_local_map_inliers;
+  if (min_inliers <= 0) return false;
+  const SE3 odometry = current_.T_cw;
+  const auto start = std::chrono::steady_clock::now();
+  track_local_map();
+  if (timer_) timer_->add("local_map", ms_since(start));
+  const SE3 d = current_.T_cw * odometry.inverse();
+  if (inliers_ >= min_inliers && d.translation().norm() < 0.1 &&
+      so3_log(d.rotation()).norm() < 3.0 * M_PI / 180.0)
+    return true;
+  current_.clear_matches();
+  current_.set_pose(odometry);
+  return false;
 }
 
 void Tracker::link_by_depth(KeyFrame& kf, const KeyFrame& prev) const {

@@ -41,6 +41,10 @@ struct TrackingOptions {
   int min_untracked_close = 70;
   int new_kf_min_points = 100;     // new points from depth per keyframe (all close ones at least)
   int min_local_map_inliers = 30;
+  // After the depth-odometry bridge carried a frame: the local map searched from its pose is
+  // kept when it gives at least this many map inliers (tracking.cpp). 0 = off; -1 = 10 with
+  // planar motion, else off (the office got worse in a single run, docs/slam.md).
+  int bridge_local_map_inliers = -1;
   float motion_model_radius = 15.0f;  // ORB-SLAM RGB-D
   float local_map_radius = 3.0f;
   std::size_t recovery_keyframes = 5;
@@ -196,6 +200,7 @@ class Tracker {
   cv::Mat gray_, depth_, last_gray_, last_depth_;  // this frame's and the last tracked frame's images
   long depth_odometry_frames_ = 0;
   bool track_depth_odometry();  // the last frame's pose moved by RGB-D odometry
+  bool refine_depth_odometry_with_local_map();
   void link_by_depth(KeyFrame& kf, const KeyFrame& prev) const;  // KeyFrame::depth_link_*
   std::optional<PosePrior> depth_prior() const;                    // depth_prior_weight
   cv::Mat last_kf_depth_;        // the newest keyframe's depth image and the keyframe
