@@ -38,18 +38,27 @@ SE3 truth_to_map() {
              Eigen::Vector3d(3, 1, -2));
 }
 
-TEST(MarkerEvaluation, ClosedFormRmseAndDistanceRmseUnderAKnownMapTransform) {
-  const auto truth = loop_markers();
-  const SE3 T = truth_to_map();
+// Four measurements of every marker, in the map frame T, each `offset(id, k)` off its true
+// place (truth frame).
+template <typename Offset>
+std::vector<MarkerMeasurement> measure(const std::vector<MarkerTruth>& truth, const SE3& T, Offset offset) {
   std::vector<MarkerMeasurement> ms;
   std::size_t frame = 0;
   for (const auto& t : truth)
     for (int k = 0; k < 4; ++k) {
-      // Marker 1 is measured at +-5 cm along x (mean exact: RMSE 0.05); the rest exactly.
-      Eigen::Vector3d p = t.position;
-      if (t.id == 1) p.x() += (k % 2 ? 0.05 : -0.05);
+      const Eigen::Vector3d p = t.position + offset(t.id, k);
       ms.push_back({frame++, 0.1 * static_cast<double>(frame), t.id, T * p, 2.0, 10});
     }
+  return ms;
+}
+
+TEST(MarkerEvaluation, ClosedFormRmseAndDistanceRmseUnderAKnownMapTransform) {
+  const auto truth = loop_markers();
+  const SE3 T = truth_to_map();
+  // Marker 1 is measured at +-5 cm along x (mean exact: RMSE 0.05); the rest exactly.
+  const auto ms = measure(truth, T, [](int id, int k) {
+    return Eigen::Vector3d(id == 1 ? (k % 2 ? 0.05 : -0.05) : 0.0, 0, 0);
+  });
   const auto e = evaluate_markers(ms, truth, MarkerAlignment::k3D);
   ASSERT_EQ(e.markers.size(), 15u);
   EXPECT_NEAR(e.markers[0].rmse, 0.05, 1e-9);
@@ -73,15 +82,11 @@ TEST(MarkerEvaluation, ClosedFormRmseAndDistanceRmseUnderAKnownMapTransform) {
 TEST(MarkerEvaluation, TwoDimensionalAlignmentFindsTheFloorOfACameraFrameMap) {
   const auto truth = loop_markers();
   const SE3 T = truth_to_map();
-  std::vector<MarkerMeasurement> ms;
-  std::size_t frame = 0;
-  for (const auto& t : truth)
-    for (int k = 0; k < 4; ++k) {
-      Eigen::Vector3d p = t.position;
-      if (t.id == 1) p.x() += (k % 2 ? 0.05 : -0.05);   // horizontal: RMSE 0.05
-      if (t.id == 8) p.z() += (k % 2 ? 0.03 : -0.03);   // vertical only: no horizontal error
-      ms.push_back({frame++, 0.1 * static_cast<double>(frame), t.id, T * p, 2.0, 10});
-    }
+  const auto ms = measure(truth, T, [](int id, int k) {
+    const double s = k % 2 ? 1.0 : -1.0;
+    return Eigen::Vector3d(id == 1 ? 0.05 * s : 0.0,   // horizontal: RMSE 0.05
+                           0, id == 8 ? 0.03 * s : 0.0);  // vertical only: no horizontal error
+  });
   const auto e = evaluate_markers(ms, truth, MarkerAlignment::k2D);
   EXPECT_TRUE(e.up_from_markers);
   ASSERT_EQ(e.markers.size(), 15u);

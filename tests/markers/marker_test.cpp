@@ -8,6 +8,7 @@
 
 #include <opencv2/imgcodecs.hpp>
 
+#include "../common/kinect_camera.hpp"
 #include "../common/run_cli.hpp"
 #include "core/errors.hpp"
 #include "markers/marker_measurements.hpp"
@@ -17,15 +18,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-PinholeCamera camera() {
-  PinholeCamera c;
-  c.fx = c.fy = 525.0;
-  c.cx = 319.5;
-  c.cy = 239.5;
-  c.width = 640;
-  c.height = 480;
-  return c;
-}
+PinholeCamera camera() { return testing::kinect_camera(); }
 
 // Renders the tag's bit image on a plane with pose T_cg (tag frame: x right, y up, z out of
 // the face), 4 x 4 supersampling per pixel; background grey 128. `size` is the side of the

@@ -6,6 +6,7 @@
 
 #include <opencv2/core.hpp>
 
+#include "../common/kinect_camera.hpp"
 #include "core/camera.hpp"
 #include "core/se3.hpp"
 
@@ -47,15 +48,6 @@ inline cv::Mat render_depth(const PinholeCamera& cam, const SE3& T_wc, const std
   return depth;
 }
 
-inline PinholeCamera kinect_camera() {
-  PinholeCamera c;
-  c.fx = c.fy = 525.0;
-  c.cx = 319.5;
-  c.cy = 239.5;
-  c.width = 640;
-  c.height = 480;
-  return c;
-}
 
 // A camera at (x, y, height) looking horizontally along heading `yaw` (z-up world).
 inline SE3 level_camera(double x, double y, double height, double yaw) {

@@ -12,6 +12,7 @@
 #include "core/errors.hpp"
 #include "io/trajectory.hpp"
 #include "ogm/lcm_publisher.hpp"
+#include "../common/kinect_camera.hpp"
 #include "ogm/poses_and_laser_scans.hpp"
 
 namespace builtscene {
@@ -19,15 +20,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-PinholeCamera kinect() {
-  PinholeCamera c;
-  c.fx = c.fy = 525;
-  c.cx = 319.5;
-  c.cy = 239.5;
-  c.width = 640;
-  c.height = 480;
-  return c;
-}
+using testing::kinect_camera;
 
 // A camera 1 m above the floor (z-up world) looking along +x at a wall 2 m ahead that fills
 // the image: every beam within the field of view returns 2 / cos(bearing).
@@ -47,7 +40,7 @@ Trajectory keyframes_up_to(int n) {
 TEST(PosesAndLaserScans, OnePerKeyframeAndAllEveryNthWithCulledOnesDropped) {
   PosesAndLaserScansOptions o;
   o.full_batch_every = 3;
-  PosesAndLaserScansEmitter e(kinect(), GroundFrame::z_up(), o);
+  PosesAndLaserScansEmitter e(kinect_camera(), GroundFrame::z_up(), o);
   std::vector<std::size_t> sizes;
   for (int i = 0; i < 7; ++i) {
     Trajectory kfs = keyframes_up_to(i + 1);
@@ -77,7 +70,7 @@ TEST(PosesAndLaserScans, OnePerKeyframeAndAllEveryNthWithCulledOnesDropped) {
 }
 
 TEST(PosesAndLaserScans, ScanOfAWallIsTheClosedForm) {
-  PosesAndLaserScansEmitter e(kinect(), GroundFrame::z_up(), {});
+  PosesAndLaserScansEmitter e(kinect_camera(), GroundFrame::z_up(), {});
   const auto b = e.add_keyframe(0, level_camera_at(0, 0), wall_depth(2.0), keyframes_up_to(1));
   const LaserScan& s = b.at(0).pairs.at(0).scan;
   // The wall fills the image: beams inside the horizontal field of view (atan(320 / 525) each
@@ -101,7 +94,7 @@ TEST(PosesAndLaserScans, ScanOfAWallIsTheClosedForm) {
 TEST(PosesAndLaserScans, LcmMessageReadsBackThroughLcmGenTypes) {
   const fs::path log = fs::temp_directory_path() / ("bs_pals_" + std::to_string(::getpid()) + ".lcmlog");
   fs::remove(log);
-  PosesAndLaserScansEmitter e(kinect(), GroundFrame::z_up(), {});
+  PosesAndLaserScansEmitter e(kinect_camera(), GroundFrame::z_up(), {});
   const auto batch = e.add_keyframe(12.5, level_camera_at(1, 2), wall_depth(2.0), keyframes_up_to(1)).at(0);
   {
     LcmPublisher pub("file://" + log.string() + "?mode=w");

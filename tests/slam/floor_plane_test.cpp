@@ -5,20 +5,13 @@
 
 #include <Eigen/Geometry>
 
+#include "../common/kinect_camera.hpp"
 #include "slam/floor_plane.hpp"
 
 namespace builtscene::slam {
 namespace {
 
-PinholeCamera kinect() {
-  PinholeCamera c;
-  c.fx = c.fy = 525;
-  c.cx = 319.5;
-  c.cy = 239.5;
-  c.width = 640;
-  c.height = 480;
-  return c;
-}
+using builtscene::testing::kinect_camera;
 
 // A camera `h` above a floor, pitched down and rolled; a wall 3 m ahead (along the floor)
 // closes the view. Depth by ray casting, with Gaussian noise of `sigma` metres.
@@ -45,7 +38,7 @@ double angle_deg(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
 }
 
 TEST(FloorPlane, RecoversATiltedFloorUnderNoiseBesideAWall) {
-  const PinholeCamera cam = kinect();
+  const PinholeCamera cam = kinect_camera();
   // Pitched 5.3 degrees down, rolled 0.4: the nominal 5-degree guess is 0.5 degrees off.
   const Eigen::Matrix3d R = (Eigen::AngleAxisd(0.4 * M_PI / 180, Eigen::Vector3d::UnitZ()) *
                              Eigen::AngleAxisd(5.3 * M_PI / 180, Eigen::Vector3d::UnitX()))
@@ -62,7 +55,7 @@ TEST(FloorPlane, RecoversATiltedFloorUnderNoiseBesideAWall) {
 }
 
 TEST(FloorPlane, NoFloorInViewGivesNone) {
-  const PinholeCamera cam = kinect();
+  const PinholeCamera cam = kinect_camera();
   // Looking up at 40 degrees: no pixel sees the floor, only the wall above the camera.
   const Eigen::Vector3d up_c = (Eigen::AngleAxisd(40 * M_PI / 180, Eigen::Vector3d::UnitX()) * Eigen::Vector3d(0, -1, 0));
   cv::Mat depth = floor_and_wall(cam, up_c, 1.0, 0.0, 1);
