@@ -3,7 +3,7 @@
 // the first camera's coordinates decides the plane every later camera is held to, and a
 // normal taken from the robot's nominal pitch is off by the first frame's wobble (0.27
 // degrees on the generated corridor: 12 cm of height over 26 m). The floor itself, seen in
-// the first frame's depth, is exact for that frame.
+// the first keyframe's depth, is exact for that camera (the map's world).
 #include <optional>
 
 #include <Eigen/Core>

@@ -67,10 +67,10 @@ class LocalMapping : public KeyFrameSink {
   std::size_t queue_size() const override;
   void interrupt_bundle_adjustment() override { abort_ba_ = true; }
 
-  // Every keyframe that comes out of processing still good goes on to this (loop closing's
-  // queue). Called in the mapping thread (or by run_pending()); set before start().
   // Before the first keyframe is queued (the queue orders it before any use in BA).
   void set_planar(const PlanarMotion& planar) { opt_.planar = planar; }
+  // Every keyframe that comes out of processing still good goes on to this (loop closing's
+  // queue). Called in the mapping thread (or by run_pending()); set before start().
   void set_keyframe_output(std::function<void(std::shared_ptr<KeyFrame>)> output) { output_ = std::move(output); }
 
   // Loop closing's handshake. request_pause() interrupts a running BA; the thread then parks

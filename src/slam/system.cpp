@@ -34,6 +34,7 @@ System::System(const RgbdCameraSettings& settings, SystemOptions options)
     learning_ = std::make_unique<SaftLearning>(*saft_, options_.saft_learning);
   }
   options_.tracking.planar = options_.mapping.planar = options_.loop.planar = options_.planar;
+  planar_guess_ = options_.planar.up_c;
   // Planar motion's priors leave the corridor's plain start a few inliers short of the map,
   // and without the local map searched from the depth bridge's pose it never gets back
   // (docs/slam.md, "Planar motion").
@@ -93,9 +94,22 @@ TrackingOutcome System::track_rgbd(const cv::Mat& image, const cv::Mat& depth_m,
   const int keypoints = static_cast<int>(features->size());
   const long frame_id = next_frame_id_++;
   Frame frame(frame_id, timestamp, std::move(features));
-  if (options_.planar.enabled && !floor_checked_) floor_from_first_frame(depth_m);
+  // Planar motion's floor: measured in every frame until one becomes the new map's first
+  // keyframe, whose camera is the world (the value set before that frame is the one kept).
+  const bool measure_floor = options_.planar.enabled && !floor_settled_;
+  if (measure_floor) floor_from_this_frame(depth_m);
   tracker_->set_images(gray, depth_m);
   TrackingOutcome out = tracker_->track(std::move(frame));
+  if (measure_floor && !floor_settled_ && out.new_keyframe) {
+    floor_settled_ = true;
+    if (floor_)
+      spdlog::info("planar motion: floor {:.3f} m below the first keyframe's camera, {:.2f} degrees from the given "
+                   "pitch ({} points)",
+                   floor_->height_m, std::acos(std::clamp(floor_->up_c.dot(planar_guess_), -1.0, 1.0)) * 180 / M_PI,
+                   floor_->inliers);
+    else
+      spdlog::warn("planar motion: no floor in the first keyframe's depth; the plane comes from the given pitch");
+  }
   out.keypoints = keypoints;
   last_timestamp_ = timestamp;
   if (database_ && out.new_keyframe) {
@@ -136,25 +150,20 @@ TrackingOutcome System::track_rgbd(const cv::Mat& image, const cv::Mat& depth_m,
   return out;
 }
 
-void System::floor_from_first_frame(const cv::Mat& depth_m) {
-  floor_checked_ = true;
+void System::floor_from_this_frame(const cv::Mat& depth_m) {
   {
     std::lock_guard lock(map_.mutex());
-    if (map_.keyframe_count() > 0) return;  // a loaded map: its world was fixed by another run
+    if (map_.keyframe_count() > 0) {  // a loaded map: its world was fixed by another run
+      floor_settled_ = true;
+      return;
+    }
   }
-  const Eigen::Vector3d guess = options_.planar.up_c;
-  floor_ = estimate_floor_plane(depth_m, settings_.camera, guess);
-  if (!floor_) {
-    spdlog::warn("planar motion: no floor in the first frame's depth; the plane comes from the given pitch");
-    return;
-  }
-  options_.planar.up_c = floor_->up_c;
+  // No keyframe exists yet, so neither local mapping nor loop closing reads the options.
+  floor_ = estimate_floor_plane(depth_m, settings_.camera, planar_guess_);
+  options_.planar.up_c = floor_ ? floor_->up_c : planar_guess_;
   tracker_->set_planar(options_.planar);
   mapping_->set_planar(options_.planar);
   if (loop_closer_) loop_closer_->set_planar(options_.planar);
-  spdlog::info("planar motion: floor {:.3f} m below the first camera, {:.2f} degrees from the given pitch ({} points)",
-               floor_->height_m, std::acos(std::clamp(floor_->up_c.dot(guess), -1.0, 1.0)) * 180 / M_PI,
-               floor_->inliers);
 }
 
 void System::shutdown() {

@@ -108,8 +108,9 @@ class System {
   void set_mode(Mode mode, const std::string& reason = "api");
   Mode mode() const { return mode_; }
   const std::vector<ModeSwitch>& mode_switches() const { return mode_switches_; }
-  // Planar motion (SystemOptions::planar): its floor normal is measured in the first frame of
-  // a new map when that frame sees the floor (floor_plane.hpp), else taken from the pitch.
+  // Planar motion (SystemOptions::planar): its floor normal is measured in the depth of the
+  // new map's first keyframe when it sees the floor (floor_plane.hpp), else taken from the
+  // pitch; a loaded map keeps the pitch's.
   const PlanarMotion& planar() const { return options_.planar; }
   const std::optional<FloorPlane>& floor_plane() const { return floor_; }
   // Test hook tried before the relocalizer on lost frames (see Tracker::set_relocalization_hook).
@@ -182,11 +183,12 @@ class System {
   std::vector<LoopEvent> events_;
   std::vector<LoopEventSubscriber> subscribers_;
   void on_loop_event(const LoopEvent& event);
-  void floor_from_first_frame(const cv::Mat& depth_m);
+  void floor_from_this_frame(const cv::Mat& depth_m);
   long next_frame_id_ = 0;
   bool shut_down_ = false;
-  bool floor_checked_ = false;
-  std::optional<FloorPlane> floor_;  // planar motion's floor, from the first frame of a new map
+  bool floor_settled_ = false;
+  Eigen::Vector3d planar_guess_ = Eigen::Vector3d::Zero();  // the up axis the given pitch implies
+  std::optional<FloorPlane> floor_;  // planar motion's floor, in the new map's first keyframe
   Mode mode_ = Mode::kSlam;
   std::vector<ModeSwitch> mode_switches_;
   double last_timestamp_ = 0;

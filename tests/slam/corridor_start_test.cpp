@@ -8,7 +8,7 @@
 // map searched from the depth odometry's pose finds the far map points again (tracking.cpp,
 // refine_depth_odometry_with_local_map).
 //
-// The floor's normal for planar motion is measured in the first frame's depth; checked
+// The floor's normal for planar motion is measured in the first keyframe's depth (frame 0 here); checked
 // here against the generated camera's true tilt.
 #include <cmath>
 #include <cstdio>
