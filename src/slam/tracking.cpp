@@ -233,14 +233,23 @@ bool Tracker::refine_depth_odometry_with_local_map() {
   // and the motion model never finds its 20 matches again.
   const int min_inliers = opt_.bridge_local_map_inliers;
   if (min_inliers <= 0) return false;
+  // A rejected search must leave no trace: the map points' visible/found counters are only
+  // counted when the result is kept, and the reference keyframe is put back.
   const SE3 odometry = current_.T_cw;
+  const auto reference = reference_;
+  const auto frame_reference = current_.reference;
   const auto start = std::chrono::steady_clock::now();
-  track_local_map();
+  track_local_map(/*count_observations=*/false);
   if (timer_) timer_->add("local_map", ms_since(start));
   const SE3 d = current_.T_cw * odometry.inverse();
   if (inliers_ >= min_inliers && d.translation().norm() < 0.1 &&
-      so3_log(d.rotation()).norm() < 3.0 * M_PI / 180.0)
+      so3_log(d.rotation()).norm() < 3.0 * M_PI / 180.0) {
+    count_local_map_observations();
     return true;
+  }
+  local_map_visible_.clear();
+  reference_ = reference;
+  current_.reference = frame_reference;
   current_.clear_matches();
   current_.set_pose(odometry);
   return false;
@@ -598,8 +607,9 @@ bool Tracker::local_map_from_nearby_keyframes() {
   return true;
 }
 
-bool Tracker::track_local_map() {
+bool Tracker::track_local_map(bool count_observations) {
   update_local_map();
+  local_map_visible_.clear();
   // Points already matched are visible; do not search them again.
   for (auto& p : current_.points) {
     if (!p) continue;
@@ -607,7 +617,7 @@ bool Tracker::track_local_map() {
       p = nullptr;
       continue;
     }
-    ++p->visible;
+    local_map_visible_.push_back(p.get());
     p->track_mark = current_.id;  // already matched in this frame
   }
   auto candidates = project_local_points();
@@ -618,7 +628,7 @@ bool Tracker::track_local_map() {
   if (!keyframe_creation_ && static_cast<int>(candidates.size()) < opt_.min_local_map_inliers &&
       local_map_from_nearby_keyframes())
     candidates = project_local_points();
-  for (const auto& c : candidates) ++c.point->visible;
+  for (const auto& c : candidates) local_map_visible_.push_back(c.point.get());
   search_local_points(current_, candidates, opt_.local_map_radius);
   PoseOptimizerOptions po = pose_options();
   if (auto prior = depth_prior()) po.priors.push_back(*prior);
@@ -629,11 +639,19 @@ bool Tracker::track_local_map() {
   for (std::size_t i = 0; i < current_.points.size(); ++i) {
     const auto& p = current_.points[i];
     if (!p || current_.outlier[i]) continue;
-    ++p->found;
     if (p->observation_count() > 0) ++inliers_;
     else if (current_.f->has_depth(i)) ++odometry_inliers_;
   }
+  if (count_observations) count_local_map_observations();
   return inliers_ >= opt_.min_local_map_inliers;
+}
+
+void Tracker::count_local_map_observations() {
+  // Culling judges a map point by how often it was found where it was predicted visible.
+  for (MapPoint* p : local_map_visible_) ++p->visible;
+  local_map_visible_.clear();
+  for (std::size_t i = 0; i < current_.points.size(); ++i)
+    if (current_.points[i] && !current_.outlier[i]) ++current_.points[i]->found;
 }
 
 bool Tracker::need_new_keyframe() const {

@@ -184,6 +184,7 @@ class Tracker {
   std::shared_ptr<KeyFrame> reference_;
   std::vector<std::shared_ptr<KeyFrame>> local_keyframes_;
   std::vector<std::shared_ptr<MapPoint>> local_points_;
+  std::vector<MapPoint*> local_map_visible_;  // predicted visible by the last local-map search, not yet counted
   long last_kf_frame_id_ = 0;
   int inliers_ = 0;
   int odometry_inliers_ = 0;  // inliers to the last frame's temporary depth points
@@ -211,7 +212,11 @@ class Tracker {
   bool track_motion_model();
   bool track_reference_keyframe();
   bool recover_near_reference();  // lost: the reference, then nearby and newest keyframes
-  bool track_local_map();
+  // Searches the local map and optimizes the pose; with count_observations the matched and
+  // predicted-visible map points' found/visible counters are counted at once, otherwise
+  // count_local_map_observations() does it when the caller keeps the result.
+  bool track_local_map(bool count_observations = true);
+  void count_local_map_observations();
   void update_local_map();
   void collect_local_points();  // local_points_ from local_keyframes_
   std::vector<ProjectedPoint> project_local_points();  // local points in view (not yet counted visible)
