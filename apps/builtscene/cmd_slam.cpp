@@ -45,6 +45,7 @@ struct SlamOptions {
   double depth_prior = slam::TrackingOptions{}.depth_prior_weight;
   int depth_prior_below = slam::TrackingOptions{}.depth_prior_below_inliers;
   int bridge_local_map = -1;  // --bridge-local-map
+  int global_ba_iterations = slam::LoopClosingOptions{}.global_ba_iterations;
   std::optional<double> planar_pitch_deg;  // --planar-motion
   SlamOgmOptions ogm;
   DescriptorOptions features;
@@ -86,6 +87,7 @@ nlohmann::json run_slam(const SlamOptions& opt) {
   so.tracking.depth_prior_weight = opt.depth_prior;
   so.tracking.depth_prior_below_inliers = opt.depth_prior_below;
   so.tracking.bridge_local_map_inliers = opt.bridge_local_map;
+  so.loop.global_ba_iterations = opt.global_ba_iterations;
   if (opt.planar_pitch_deg) so.planar = slam::PlanarMotion::from_pitch(*opt.planar_pitch_deg);
   if (opt.motion_prior_cm > 0) {
     so.tracking.motion_prior = true;
@@ -320,6 +322,11 @@ const bool registered_slam = register_command({
                      "result when it has this many map inliers (0 = off; default: 10 with --planar-motion, else off; "
                      "docs/slam.md)")
           ->check(CLI::Range(0, 1000));
+      cmd.add_option("--global-ba-iterations", opt->global_ba_iterations,
+                     "Solver iterations of the global bundle adjustment after each loop closure, in each of its "
+                     "two phases (robust, then after removing outliers)")
+          ->capture_default_str()
+          ->check(CLI::Range(1, 1000));
       cmd.add_option("--depth-prior-below", opt->depth_prior_below,
                      "... only after a frame with fewer map inliers than this (0 = every frame)")
           ->capture_default_str()

@@ -35,7 +35,7 @@ Tracker::Tracker(std::shared_ptr<const FrameContext> ctx, Map& map, KeyFrameSink
 
 void Tracker::reset() {
   state_ = TrackingState::kNotInitialized;
-  has_last_ = has_velocity_ = weak_ = bridged_ = false;
+  has_last_ = has_velocity_ = has_feature_velocity_ = last_by_depth_ = weak_ = bridged_ = false;
   reference_.reset();
   local_keyframes_.clear();
   local_points_.clear();
@@ -147,11 +147,19 @@ TrackingOutcome Tracker::track(Frame frame) {
       // After a loss or relocalization the last tracked frame is from another time and place:
       // no motion to extrapolate.
       has_velocity_ = was_ok && !relocalized;
-      if (has_velocity_ && !by_depth) {
+      // The first frame features hold again after a bridge also carries the correction of the
+      // bridge's drift: not a velocity.
+      if (has_velocity_ && !by_depth && !last_by_depth_) {
         recent_speeds_.push_back(velocity_.translation().norm());
         if (recent_speeds_.size() > 30) recent_speeds_.pop_front();
+        feature_velocity_ = velocity_;
+        has_feature_velocity_ = true;
       }
-      if (!has_velocity_) recent_speeds_.clear();
+      if (!has_velocity_) {
+        recent_speeds_.clear();
+        has_feature_velocity_ = false;
+      }
+      last_by_depth_ = by_depth;
       // Temporary (visual-odometry) matches do not count towards the map.
       for (auto& p : current_.points)
         if (p && p->observation_count() == 0) p = nullptr;
@@ -162,7 +170,7 @@ TrackingOutcome Tracker::track(Frame frame) {
       for (std::size_t i = 0; i < current_.points.size(); ++i)
         if (current_.outlier[i]) current_.points[i] = nullptr;
     } else {
-      has_velocity_ = false;
+      has_velocity_ = has_feature_velocity_ = last_by_depth_ = false;
     }
   }
   FrameRecord rec;
@@ -191,18 +199,26 @@ TrackingOutcome Tracker::track(Frame frame) {
 
 SE3 Tracker::odometry_prediction() const {
   if (!has_velocity_) return SE3();
-  if (recent_speeds_.size() < 5) return velocity_;
-  // The depth odometry keeps the prediction where one plane leaves a direction free, so an
-  // inflated velocity (a few weakly tracked frames before the features gave out) would run
-  // away along the wall: its speed is capped at the median of the last 30 feature-tracked
-  // frames. (At 1.5 times the median the generated corridor's 30-frame gaps still ran at
-  // 1.8 times the true speed.)
+  // On a depth-odometry bridge (the last frame was carried by it) the prediction is the last
+  // feature-tracked frame's motion, not the last frame's: along a plain corridor the depth
+  // leaves the slide free and returns the prediction plus noise there, and feeding that back
+  // made the speed a random walk; capped from above (below), it drifted down, and the
+  // generated corridor's second world stalled at a quarter of the true speed for 100 frames
+  // (2.3 m short).
+  const bool hold = last_by_depth_ && has_feature_velocity_;
+  const SE3& v = hold ? feature_velocity_ : velocity_;
+  if (recent_speeds_.size() < 5) return v;
+  // Its speed is the median of the last 30 feature-tracked frames: held at it on the bridge,
+  // capped at it otherwise. The depth odometry keeps the prediction where one plane leaves a
+  // direction free, so an inflated velocity (a few weakly tracked frames before the features
+  // gave out) would run away along the wall. (At 1.5 times the median the generated
+  // corridor's 30-frame gaps still ran at 1.8 times the true speed.)
   std::vector<double> s(recent_speeds_.begin(), recent_speeds_.end());
   std::nth_element(s.begin(), s.begin() + static_cast<long>(s.size() / 2), s.end());
-  const double cap = s[s.size() / 2];
-  const double speed = velocity_.translation().norm();
-  if (speed <= cap) return velocity_;
-  return SE3(velocity_.rotation(), velocity_.translation() * (cap / speed));
+  const double median = s[s.size() / 2];
+  const double speed = v.translation().norm();
+  if ((speed <= median && !hold) || !(speed > 1e-9)) return v;
+  return SE3(v.rotation(), v.translation() * (median / speed));
 }
 
 long Tracker::depth_odometry_prior_frames() const {
@@ -363,7 +379,7 @@ bool Tracker::initialize() {
   local_keyframes_ = {kf};
   local_points_ = kf->good_points();
   state_ = TrackingState::kOk;
-  has_velocity_ = false;
+  has_velocity_ = has_feature_velocity_ = last_by_depth_ = false;
   if (sink_) sink_->insert_keyframe(kf);
   return true;
 }

@@ -179,6 +179,9 @@ class Tracker {
   bool has_velocity_ = false;
   std::optional<SE3> predicted_T_cw_;  // this frame's motion-model prediction (motion_prior)
   SE3 velocity_;  // T_cur_last
+  SE3 feature_velocity_;  // velocity_ of the last frame tracked by features (odometry_prediction)
+  bool has_feature_velocity_ = false;
+  bool last_by_depth_ = false;  // the last frame was carried by the depth odometry
   std::deque<double> recent_speeds_;  // metres per frame of the last frames tracked by features
   SE3 odometry_prediction() const;
   std::shared_ptr<KeyFrame> reference_;
