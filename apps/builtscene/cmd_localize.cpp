@@ -98,7 +98,8 @@ nlohmann::json run_localize(const LocalizeOptions& opt) {
       {"relocalizations",
        {{"count", system.relocalized_frames().size()},
         {"frames", system.relocalized_frames()},
-        {"while_on_odometry", system.odometry_relocalizations()}}},
+        {"while_on_odometry", system.odometry_relocalizations()},
+        {"attempts", system.relocalization_attempts()}}},
       {"first_relocalized_frame", system.first_relocalized_frame() >= 0 ? nlohmann::json(system.first_relocalized_frame())
                                                                          : nlohmann::json(nullptr)},
       {"bad_input", frames.bad_input()},

@@ -300,4 +300,6 @@ std::size_t System::map_point_count() const {
   return map_.point_count();
 }
 
+long System::relocalization_attempts() const { return relocalizer_ ? relocalizer_->stats().attempts : 0; }
+
 }  // namespace builtscene::slam

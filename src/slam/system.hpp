@@ -145,6 +145,8 @@ class System {
   std::vector<long> relocalized_frames() const { return tracker_->relocalized_frames(); }
   // Localization mode: frames on visual odometry whose pose came from relocalization instead.
   long odometry_relocalizations() const { return tracker_->odometry_relocalizations(); }
+  // Frames on which relocalization was tried (successful or not); 0 without place recognition.
+  long relocalization_attempts() const;
   // Frames whose pose came from RGB-D odometry because features could not hold it.
   long depth_odometry_frames() const { return tracker_->depth_odometry_frames(); }
   long depth_odometry_prior_frames() const { return tracker_->depth_odometry_prior_frames(); }
