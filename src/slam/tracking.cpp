@@ -202,7 +202,7 @@ SE3 Tracker::odometry_prediction() const {
   // On a depth-odometry bridge (the last frame was carried by it) the prediction is the last
   // feature-tracked frame's motion, not the last frame's: along a plain corridor the depth
   // leaves the slide free and returns the prediction plus noise there, and feeding that back
-  // made the speed a random walk; capped from above (below), it drifted down, and the
+  // made the speed a random walk; capped from above and free below, it drifted down, and the
   // generated corridor's second world stalled at a quarter of the true speed for 100 frames
   // (2.3 m short).
   // Only while driving straight: into a turn a robot slows down (the generated office turns in
