@@ -35,7 +35,8 @@ Tracker::Tracker(std::shared_ptr<const FrameContext> ctx, Map& map, KeyFrameSink
 
 void Tracker::reset() {
   state_ = TrackingState::kNotInitialized;
-  has_last_ = has_velocity_ = has_feature_velocity_ = last_by_depth_ = weak_ = bridged_ = false;
+  has_last_ = weak_ = bridged_ = false;
+  forget_motion();
   reference_.reset();
   local_keyframes_.clear();
   local_points_.clear();
@@ -170,7 +171,7 @@ TrackingOutcome Tracker::track(Frame frame) {
       for (std::size_t i = 0; i < current_.points.size(); ++i)
         if (current_.outlier[i]) current_.points[i] = nullptr;
     } else {
-      has_velocity_ = has_feature_velocity_ = last_by_depth_ = false;
+      forget_motion();
     }
   }
   FrameRecord rec;
@@ -196,6 +197,8 @@ TrackingOutcome Tracker::track(Frame frame) {
   depth_.release();
   return out;
 }
+
+void Tracker::forget_motion() { has_velocity_ = has_feature_velocity_ = last_by_depth_ = false; }
 
 SE3 Tracker::odometry_prediction() const {
   if (!has_velocity_) return SE3();
@@ -383,7 +386,7 @@ bool Tracker::initialize() {
   local_keyframes_ = {kf};
   local_points_ = kf->good_points();
   state_ = TrackingState::kOk;
-  has_velocity_ = has_feature_velocity_ = last_by_depth_ = false;
+  forget_motion();
   if (sink_) sink_->insert_keyframe(kf);
   return true;
 }

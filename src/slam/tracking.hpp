@@ -184,6 +184,8 @@ class Tracker {
   bool last_by_depth_ = false;  // the last frame was carried by the depth odometry
   std::deque<double> recent_speeds_;  // metres per frame of the last frames tracked by features
   SE3 odometry_prediction() const;
+  // No motion to extrapolate (start, loss, new map): the velocities and the bridge flag.
+  void forget_motion();
   std::shared_ptr<KeyFrame> reference_;
   std::vector<std::shared_ptr<KeyFrame>> local_keyframes_;
   std::vector<std::shared_ptr<MapPoint>> local_points_;
