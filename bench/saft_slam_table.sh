@@ -9,7 +9,8 @@
 #   kitchen      the real ../shared/data/7scenes-kitchen (first FRAMES frames; skipped when absent)
 # with local mapping in its thread (as a user runs it), plus tracked frames, frames per
 # second and, for the learning modes, frames per weight update. Online learning runs in its
-# own thread, so runs differ: that is why the median.
+# own thread, so runs differ: that is why the median. METHODS may add `checked`: continuous
+# with --saft-handover-check (a held-out quarter of each batch gates the hand-over).
 #   RUNS=5 FRAMES=300 bash bench/saft_slam_table.sh   -> bench-out/saft_slam/table.md, table.json
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -50,7 +51,11 @@ for seq in $SEQUENCES; do
     for run in $(seq 1 "$RUNS"); do
       tag="$seq-$method-$run"
       [ -f "$OUT/$tag.ate.json" ] && continue
-      if [ "$method" = orb ]; then args=(--descriptor orb); else args=(--descriptor saft --saft-mode "$method"); fi
+      case $method in
+        orb) args=(--descriptor orb) ;;
+        checked) args=(--descriptor saft --saft-mode continuous --saft-handover-check) ;;
+        *) args=(--descriptor saft --saft-mode "$method") ;;
+      esac
       "$B" slam --dataset "$d" --max-frames "$FRAMES" --trajectory "$OUT/$tag.txt" "${args[@]}" \
         --inliers-out "$OUT/$tag.inliers.csv" --json > "$OUT/$tag.json" 2> "$OUT/$tag.log" || true
       "$B" eval ate --gt "$d/groundtruth.txt" --est "$OUT/$tag.txt" --json > "$OUT/$tag.ate.json" 2>> "$OUT/$tag.log" \

@@ -25,6 +25,9 @@ void DescriptorOptions::add_to(CLI::App& cmd) {
   cmd.add_option("--saft-anchor", saft_anchor,
                  "SAFT online learning: weight of the pull towards the pre-trained descriptors (0 = none; docs/saft.md)")
       ->capture_default_str();
+  cmd.add_flag("--saft-handover-check", saft_handover_check,
+               "Continuous SAFT: hold out a quarter of each batch and hand the new weights over only if the "
+               "training objective on it did not rise (else go back; docs/saft.md)");
   cmd.add_option("--saft-weights-out", saft_weights_out, "Output: the SAFT weights at the end of the run (fine-tuned)");
   cmd.add_option("--inliers-out", inliers_out,
                  "Output: CSV per frame of matches and inliers after the initial pose and after local-map tracking");
@@ -42,6 +45,9 @@ void DescriptorOptions::apply(slam::SystemOptions& so) const {
   so.saft_learning.target_accuracy = saft_target_accuracy;
   if (!(saft_anchor >= 0 && saft_anchor < 1e6)) throw InputError("--saft-anchor: expected a value >= 0, got " + std::to_string(saft_anchor));
   so.saft_learning.anchor_weight = saft_anchor;
+  so.saft_learning.handover_check = saft_handover_check;
+  if (saft_handover_check && so.saft_learning.mode != slam::SaftLearningMode::kContinuous)
+    throw InputError("--saft-handover-check needs --saft-mode continuous");
   if (so.descriptor == DescriptorChoice::kOrb && (!saft_weights.empty() || saft_mode != "offline" || !saft_weights_out.empty()))
     throw InputError("--saft-weights, --saft-mode and --saft-weights-out need --descriptor saft");
 }
@@ -91,6 +97,8 @@ nlohmann::json TrackingDiagnostics::summary(slam::System& system, const Descript
                  {"passes", s.passes},
                  {"weight_updates", s.weight_updates},
                  {"target_reached", s.target_reached},
+                 {"handover_check", learning->options().handover_check},
+                 {"handovers_refused", s.handovers_refused},
                  {"frames_per_update", s.weight_updates > 0 ? static_cast<double>(rows_.size()) / s.weight_updates : 0.0},
                  {"first_accuracy", s.first_accuracy},
                  {"last_accuracy", s.last_accuracy}};

@@ -248,8 +248,46 @@ double SaftOnlineTrainer::accuracy(const SaftLabelledPairs& pairs) {
   return impl_->loss_of(pairs.first, pairs.second, pairs.label, /*anchored=*/false).second;
 }
 
+SaftOnlineTrainer::CheckedStep SaftOnlineTrainer::train_checked(const SaftLabelledPairs& train,
+                                                                const SaftLabelledPairs& held) {
+  CheckedStep out;
+  const std::vector<float> before = snapshot();
+  out.held_before = objective(held);
+  out.step = this->train(train);
+  out.held_after = objective(held);
+  out.kept = out.held_after <= out.held_before;
+  if (!out.kept) restore(before);
+  return out;
+}
+
+double SaftOnlineTrainer::objective(const SaftLabelledPairs& pairs) {
+  if (pairs.size() == 0) return 0.0;
+  torch::set_num_threads(impl_->options.threads);
+  c10::InferenceMode guard;
+  impl_->network.impl_->net->eval();
+  return impl_->loss_of(pairs.first, pairs.second, pairs.label, /*anchored=*/true).first.item<double>();
+}
+
 std::vector<float> SaftOnlineTrainer::weights() const { return impl_->network.weights(); }
 
 int SaftOnlineTrainer::steps() const { return impl_->steps; }
+
+std::vector<float> SaftOnlineTrainer::snapshot() const {
+  std::vector<float> state = impl_->network.weights();
+  state.push_back(impl_->w.item<float>());
+  state.push_back(impl_->b.item<float>());
+  return state;
+}
+
+void SaftOnlineTrainer::restore(const std::vector<float>& state) {
+  if (state.size() < 2) throw std::invalid_argument("SAFT online trainer: state too short");
+  impl_->network.set_weights(std::vector<float>(state.begin(), state.end() - 2));
+  {
+    torch::NoGradGuard no_grad;
+    impl_->w.fill_(state[state.size() - 2]);
+    impl_->b.fill_(state[state.size() - 1]);
+  }
+  impl_->optimizer->state().clear();  // momentum buffers start again from zero
+}
 
 }  // namespace builtscene

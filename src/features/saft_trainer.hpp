@@ -93,8 +93,22 @@ class SaftOnlineTrainer {
   SaftTrainingStep train(const SaftLabelledPairs& pairs);
   // Accuracy of the current weights on `pairs` (no augmentation, no update).
   double accuracy(const SaftLabelledPairs& pairs);
+  // The training objective (hinge loss plus the anchor term) on `pairs`, no augmentation, no update.
+  double objective(const SaftLabelledPairs& pairs);
+  // One pass over `train`, kept only if the objective on `held` (pairs it does not train on)
+  // did not rise; otherwise the trainer goes back to its state before the pass (restore()).
+  struct CheckedStep {
+    SaftTrainingStep step;
+    double held_before = 0, held_after = 0;  // objective on `held`
+    bool kept = false;
+  };
+  CheckedStep train_checked(const SaftLabelledPairs& train, const SaftLabelledPairs& held);
   std::vector<float> weights() const;  // for SaftNetwork::set_weights
   int steps() const;
+  // The whole learned state (network weights and the hinge decision), and going back to one:
+  // restore() also forgets the optimizer's momentum, so the refused direction is not retaken.
+  std::vector<float> snapshot() const;
+  void restore(const std::vector<float>& state);  // std::invalid_argument on a wrong size
 
  private:
   struct Impl;

@@ -112,5 +112,75 @@ TEST(SaftOnlineTrainer, FineTuningRaisesHeldOutAccuracyOnTheScene) {
   EXPECT_NE(start.weights(), trainer.weights());
 }
 
+TEST(SaftOnlineTrainer, RestoreGoesBackToTheSnapshotExactly) {
+  // The hand-over check (slam::SaftLearningOptions::handover_check) refuses a pass by going
+  // back to the state before it: the same weights and decision, so the same accuracy on any
+  // pairs, and the trainer can learn on from there.
+  SaftPairGeneratorOptions g;
+  g.keypoints_per_image = 200;
+  g.warps_per_image = 2;
+  const SaftPairPool pool = generate_saft_pairs({test::textured_image(320, 240, 23)}, g);
+  ASSERT_GT(pool.size(), 100);
+  std::mt19937_64 rng(4);
+  const int split = pool.size() / 2;
+  const SaftLabelledPairs train = labelled(pool, 0, split, rng), held = labelled(pool, split, pool.size(), rng);
+  SaftNetworkOptions o;
+  o.batch_size = 64;
+  SaftNetwork start(o, 7);
+  SaftOnlineTrainer trainer(start, {.learning_rate = 1e-2, .anchor_weight = 0.0, .batch_pairs = 64, .seed = 2});
+  const std::vector<float> before = trainer.snapshot();
+  EXPECT_EQ(static_cast<long>(before.size()), start.parameter_count() + 2);  // weights, then the decision's w and b
+  const double held_before = trainer.accuracy(held);
+  for (int pass = 0; pass < 3; ++pass) trainer.train(train);
+  ASSERT_NE(trainer.weights(), start.weights());
+  trainer.restore(before);
+  EXPECT_EQ(trainer.weights(), start.weights());
+  EXPECT_EQ(trainer.snapshot(), before);
+  EXPECT_EQ(trainer.accuracy(held), held_before);
+  trainer.train(train);  // learns on from the restored state
+  EXPECT_NE(trainer.weights(), start.weights());
+  EXPECT_THROW(trainer.restore(std::vector<float>(before.begin(), before.end() - 3)), std::invalid_argument);
+}
+
+TEST(SaftOnlineTrainer, CheckedPassKeepsWhatHelpsTheHeldOutPairsAndRefusesWhatHurtsThem) {
+  // From an untrained net, checked passes on true labels lower the held-out objective (and
+  // raise the held-out accuracy) and are kept. Then one checked pass on the same pairs with
+  // every label inverted: it learns the opposite, the held-out objective rises, and the
+  // trainer is back where the pass started.
+  SaftPairGeneratorOptions g;
+  g.keypoints_per_image = 200;
+  g.warps_per_image = 2;
+  const SaftPairPool pool = generate_saft_pairs({test::textured_image(320, 240, 24)}, g);
+  ASSERT_GT(pool.size(), 200);
+  std::mt19937_64 rng(5);
+  const int split = pool.size() * 3 / 4;
+  const SaftLabelledPairs train = labelled(pool, 0, split, rng), held = labelled(pool, split, pool.size(), rng);
+  SaftLabelledPairs inverted = train;
+  for (int& l : inverted.label) l = -l;
+  SaftNetworkOptions o;
+  o.batch_size = 64;
+  SaftNetwork start(o, 8);
+  const SaftOnlineOptions options{.learning_rate = 1e-2, .anchor_weight = 0.0, .batch_pairs = 128, .seed = 3};
+
+  SaftOnlineTrainer good(start, options);
+  SaftOnlineTrainer::CheckedStep last;
+  for (int pass = 0; pass < 6; ++pass) last = good.train_checked(train, held);
+  std::printf("true labels, last pass: held-out objective %.3f -> %.3f, kept %d\n", last.held_before, last.held_after,
+              last.kept);
+  EXPECT_GT(good.accuracy(held), SaftOnlineTrainer(start, options).accuracy(held) + 0.05);
+  EXPECT_LT(good.objective(held), SaftOnlineTrainer(start, options).objective(held));
+  EXPECT_NE(good.weights(), start.weights());
+
+  const std::vector<float> trained = good.weights();
+  const double trained_accuracy = good.accuracy(held);
+  const SaftOnlineTrainer::CheckedStep refused = good.train_checked(inverted, held);
+  std::printf("inverted labels: held-out objective %.3f -> %.3f, kept %d\n", refused.held_before, refused.held_after,
+              refused.kept);
+  EXPECT_GT(refused.held_after, refused.held_before);
+  EXPECT_FALSE(refused.kept);
+  EXPECT_EQ(good.weights(), trained);
+  EXPECT_EQ(good.accuracy(held), trained_accuracy);
+}
+
 }  // namespace
 }  // namespace builtscene

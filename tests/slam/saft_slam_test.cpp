@@ -6,6 +6,7 @@
 // ground-truth poses and depth images, not with the SLAM's own associations).
 #include <cmath>
 #include <filesystem>
+#include <functional>
 #include <map>
 #include <vector>
 
@@ -33,7 +34,7 @@ struct SaftRun {
 
 // `map_out`: the map is saved there at the end.
 SaftRun run(const TumDataset& data, SaftLearningMode mode, bool synchronous = false, int max_passes = 20,
-            const std::filesystem::path& map_out = {}) {
+            const std::filesystem::path& map_out = {}, const std::function<void(SaftLearningOptions&)>& tune = {}) {
   SystemOptions so;
   so.mapping_thread = false;
   so.descriptor = DescriptorChoice::kSaft;
@@ -45,6 +46,7 @@ SaftRun run(const TumDataset& data, SaftLearningMode mode, bool synchronous = fa
   so.saft_learning.on_batch = [&](const SaftLabelledPairs& b) {
     if (seen++ % 10 == 0) r.batches.push_back(b);
   };
+  if (tune) tune(so.saft_learning);
   System slam(data.settings(), so);
   for (std::size_t i = 0; i < data.size(); ++i) {
     const auto out = slam.track_rgbd(data.load_rgb(i), data.load_depth(i), data.entry(i).timestamp);
@@ -174,6 +176,28 @@ TEST(SaftSlam, DiscreteLearningReleasesWeightsAfterSeveralPassesOverABatch) {
   for (std::size_t i = 0; i < again.trajectory.size(); ++i)
     EXPECT_TRUE(again.trajectory[i].pose.matrix() == discrete.trajectory[i].pose.matrix()) << "pose " << i;
   EXPECT_EQ(again.learning.passes, s.passes);
+}
+
+// The hand-over check (continuous mode) inside the SLAM: every batch is trained once, and its
+// weights are either installed before the next frame or refused (whether the held-out pairs
+// gained is SaftOnlineTrainer.CheckedPass*'s check); tracking is unharmed either way.
+TEST(SaftSlam, WithTheHandOverCheckEveryBatchIsInstalledOrRefused) {
+  const GeneratedWorld world("lab-room", synth::MotionKind::Handheld, 6, 30, /*kinect_noise=*/false);
+  const auto data = TumDataset::open(world.dir);
+  const int n = static_cast<int>(data.size());
+  const SaftRun checked = run(data, SaftLearningMode::kContinuous, /*synchronous=*/true, 20, {},
+                              [](SaftLearningOptions& o) { o.handover_check = true; });
+  const auto& c = checked.learning;
+  std::printf("checked continuous SAFT: tracked %d/%d, ATE %.2f cm, %ld trained, %ld installed, %ld refused\n",
+              checked.tracked, n, 100 * checked.ate_rmse, c.batches_trained, c.weight_updates, c.handovers_refused);
+  ASSERT_GE(c.batches_trained, n / 2);
+  EXPECT_EQ(c.batches_trained, c.batches_prepared);  // synchronous: none dropped
+  EXPECT_EQ(c.passes, c.batches_trained);            // one pass per batch, as continuous
+  // The last frame's batch, when kept, is installed only after the run.
+  EXPECT_GE(c.weight_updates + c.handovers_refused, c.batches_trained - 1);
+  EXPECT_LE(c.weight_updates + c.handovers_refused, c.batches_trained);
+  EXPECT_GE(checked.tracked, n * 95 / 100);
+  EXPECT_LT(checked.ate_rmse, 0.03);
 }
 
 // A map built while the net learned holds descriptors of many nets. They must stay in the
