@@ -27,7 +27,7 @@ void DescriptorOptions::add_to(CLI::App& cmd) {
       ->capture_default_str();
   cmd.add_flag("--saft-handover-check", saft_handover_check,
                "Continuous SAFT: hold out a quarter of each batch and hand the new weights over only if the "
-               "training objective on it did not rise (else go back; docs/saft.md)");
+               "accuracy on it did not fall (else go back; docs/saft.md)");
   cmd.add_option("--saft-weights-out", saft_weights_out, "Output: the SAFT weights at the end of the run (fine-tuned)");
   cmd.add_option("--inliers-out", inliers_out,
                  "Output: CSV per frame of matches and inliers after the initial pose and after local-map tracking");

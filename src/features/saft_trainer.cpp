@@ -252,20 +252,12 @@ SaftOnlineTrainer::CheckedStep SaftOnlineTrainer::train_checked(const SaftLabell
                                                                 const SaftLabelledPairs& held) {
   CheckedStep out;
   const std::vector<float> before = snapshot();
-  out.held_before = objective(held);
+  out.held_before = accuracy(held);
   out.step = this->train(train);
-  out.held_after = objective(held);
-  out.kept = out.held_after <= out.held_before;
+  out.held_after = accuracy(held);
+  out.kept = out.held_after >= out.held_before;
   if (!out.kept) restore(before);
   return out;
-}
-
-double SaftOnlineTrainer::objective(const SaftLabelledPairs& pairs) {
-  if (pairs.size() == 0) return 0.0;
-  torch::set_num_threads(impl_->options.threads);
-  c10::InferenceMode guard;
-  impl_->network.impl_->net->eval();
-  return impl_->loss_of(pairs.first, pairs.second, pairs.label, /*anchored=*/true).first.item<double>();
 }
 
 std::vector<float> SaftOnlineTrainer::weights() const { return impl_->network.weights(); }

@@ -66,7 +66,7 @@ struct SaftLearningOptions {
   int max_passes = 20;            // discrete mode: ... and so does the last pass over one batch
   int patch_keyframes = 30;       // newest keyframes whose patches are kept (1 KB per keypoint)
   // Continuous mode: every 4th pair of a batch is held out; after the pass over the others the
-  // weights are handed over only if the training objective on the held-out pairs did not rise,
+  // weights are handed over only if the accuracy on the held-out pairs did not fall,
   // else the learner goes back to the weights it had (and drops its momentum). Off: the source's hand-over after
   // every batch.
   bool handover_check = false;
@@ -89,7 +89,7 @@ class SaftLearning {
     long passes = 0;            // training passes (discrete: several per batch)
     long weight_updates = 0;    // weights installed in the prediction net
     long target_reached = 0;    // discrete: batches released by target_accuracy (the others by max_passes)
-    long handovers_refused = 0; // handover_check: batches whose held-out objective rose (weights kept back)
+    long handovers_refused = 0; // handover_check: batches whose held-out accuracy fell (weights kept back)
     double last_accuracy = 0;   // of the last pass
     double first_accuracy = 0;  // of the first pass (the pre-trained net on this scene)
   };
