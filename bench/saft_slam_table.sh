@@ -68,7 +68,8 @@ python3 - "$OUT" "$RUNS" "$FRAMES" "$SEQUENCES" "$METHODS" <<'PY'
 import json, os, statistics, sys
 out, runs, frames = sys.argv[1], int(sys.argv[2]), int(sys.argv[3])
 seqs, methods = sys.argv[4].split(), sys.argv[5].split()
-names = {"orb": "ORB", "offline": "offline SAFT", "continuous": "continuous SAFT", "discrete": "discrete SAFT"}
+names = {"orb": "ORB", "offline": "offline SAFT", "continuous": "continuous SAFT", "discrete": "discrete SAFT",
+         "checked": "continuous SAFT, hand-over check"}
 rows, table = [], {}
 for s in seqs:
     for m in methods:

@@ -74,6 +74,10 @@ nlohmann::json run_slam(const SlamOptions& opt) {
                                      std::pair{"--depth-link-weight", opt.depth_link_weight},
                                      std::pair{"--depth-prior", opt.depth_prior}})
     if (!std::isfinite(value)) throw InputError(std::string(flag) + ": not a number");
+  {
+    slam::SystemOptions flags_only;  // the descriptor flags are checked before the dataset is read
+    opt.features.apply(flags_only);
+  }
   const TumDataset data = TumDataset::open(opt.dataset, opt.camera);
   const auto camera_file = opt.camera.empty() ? opt.dataset / "camera.yaml" : opt.camera;
   slam::SystemOptions so;

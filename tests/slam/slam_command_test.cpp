@@ -133,7 +133,10 @@ TEST_F(SlamCommand, BadPriorAndLinkValuesAreUsageErrorsNamingTheFlag) {
                                    std::pair{" --depth-links --depth-link-weight 0", "--depth-link-weight"},
                                    std::pair{" --depth-prior -0.5", "--depth-prior"},
                                    std::pair{" --depth-prior nan", "--depth-prior"},
-                                   std::pair{" --depth-prior-below -3", "--depth-prior-below"}}) {
+                                   std::pair{" --depth-prior-below -3", "--depth-prior-below"},
+                                   std::pair{" --descriptor saft --saft-handover-check", "--saft-handover-check"},
+                                   std::pair{" --descriptor saft --saft-mode discrete --saft-handover-check",
+                                             "--saft-handover-check"}}) {
     const auto r = run_cli(base + args);
     EXPECT_EQ(r.exit_code, 2) << args;
     EXPECT_NE(r.err.find(flag), std::string::npos) << args << ": " << r.err;
