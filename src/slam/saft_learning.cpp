@@ -181,14 +181,10 @@ void SaftLearning::run() {
   }
 }
 
-namespace {
-
-// Rows i with i % every == 0 held out, the others to train on (the pair sources are not
-// needed for training and are left out).
-std::pair<SaftLabelledPairs, SaftLabelledPairs> hold_out(const SaftLabelledPairs& batch, int every) {
+std::pair<SaftLabelledPairs, SaftLabelledPairs> hold_out_pairs(const SaftLabelledPairs& batch, int every) {
   SaftLabelledPairs train, held;
   for (int i = 0; i < batch.size(); ++i) {
-    SaftLabelledPairs& to = i % every == 0 ? held : train;
+    SaftLabelledPairs& to = (i / 2) % every == 0 ? held : train;
     to.first.push_back(batch.first.row(i));
     to.second.push_back(batch.second.row(i));
     to.label.push_back(batch.label[static_cast<std::size_t>(i)]);
@@ -196,11 +192,9 @@ std::pair<SaftLabelledPairs, SaftLabelledPairs> hold_out(const SaftLabelledPairs
   return {std::move(train), std::move(held)};
 }
 
-}  // namespace
-
 bool SaftLearning::train(const SaftLabelledPairs& batch) {
   if (options_.handover_check && options_.mode == SaftLearningMode::kContinuous && batch.size() >= 8) {
-    const auto [part, held] = hold_out(batch, 4);
+    const auto [part, held] = hold_out_pairs(batch, 4);
     const auto checked = trainer_->train_checked(part, held);
     std::vector<float> w = checked.kept ? trainer_->weights() : std::vector<float>();
     std::lock_guard lock(mutex_);

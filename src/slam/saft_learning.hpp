@@ -65,7 +65,7 @@ struct SaftLearningOptions {
   double target_accuracy = 0.98;  // discrete mode: a pass this accurate releases the weights
   int max_passes = 20;            // discrete mode: ... and so does the last pass over one batch
   int patch_keyframes = 30;       // newest keyframes whose patches are kept (1 KB per keypoint)
-  // Continuous mode: every 4th pair of a batch is held out; after the pass over the others the
+  // Continuous mode: a quarter of a batch's pairs (balanced) is held out; after the pass over the others the
   // weights are handed over only if the accuracy on the held-out pairs did not fall,
   // else the learner goes back to the weights it had (and drops its momentum). Off: the source's hand-over after
   // every batch.
@@ -78,6 +78,12 @@ struct SaftLearningOptions {
   // Sees every prepared batch in the tracking thread (tests check pairs against ground truth).
   std::function<void(const SaftLabelledPairs&)> on_batch;
 };
+
+// The hand-over check's split: every `every`-th couple of rows held out (second), the others
+// to train on (first). make_pairs() writes a map point's positive pair in row 2k and a negative
+// pair from the same point in row 2k + 1, so couples keep the held-out part balanced (a first
+// version held out every 4th row: only positive pairs). Pair sources are left out.
+std::pair<SaftLabelledPairs, SaftLabelledPairs> hold_out_pairs(const SaftLabelledPairs& batch, int every);
 
 class SaftLearning {
  public:
