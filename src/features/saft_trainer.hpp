@@ -95,9 +95,6 @@ class SaftOnlineTrainer {
   double accuracy(const SaftLabelledPairs& pairs);
   // One pass over `train`, kept only if the accuracy on `held` (pairs it does not train on)
   // did not fall; otherwise the trainer goes back to its state before the pass (restore()).
-  // Measured against two other criteria on 300-frame runs (docs/saft.md): the held-out hinge
-  // loss refused every pass (the decision starts uncalibrated, so any first step raised it),
-  // and the held-out ROC area refused none (a small step never reorders the pairs).
   struct CheckedStep {
     SaftTrainingStep step;
     double held_before = 0, held_after = 0;  // accuracy on `held`
