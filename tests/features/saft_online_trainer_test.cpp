@@ -83,17 +83,33 @@ SaftLabelledPairs labelled(const SaftPairPool& pool, int begin, int end, std::mt
   return out;
 }
 
-TEST(SaftOnlineTrainer, FineTuningRaisesHeldOutAccuracyOnTheScene) {
-  // An untrained net (random weights) learns the scene's pairs: its accuracy on pairs of
-  // keypoints it never trained on must rise well above the start.
+// Labelled pairs of generated textured images (one per seed): the first `train_share` of the
+// keypoints to train on, the rest held out.
+struct ScenePairs {
+  SaftLabelledPairs train, held;
+  int pool_size = 0;
+};
+ScenePairs scene_pairs(const std::vector<int>& image_seeds, double train_share, std::uint64_t rng_seed) {
   SaftPairGeneratorOptions g;
   g.keypoints_per_image = 200;
   g.warps_per_image = 2;
-  const SaftPairPool pool = generate_saft_pairs({test::textured_image(320, 240, 21), test::textured_image(320, 240, 22)}, g);
-  ASSERT_GT(pool.size(), 400);
-  std::mt19937_64 rng(3);
-  const int split = pool.size() * 3 / 4;
-  const SaftLabelledPairs train = labelled(pool, 0, split, rng), held = labelled(pool, split, pool.size(), rng);
+  std::vector<cv::Mat> images;
+  for (int seed : image_seeds) images.push_back(test::textured_image(320, 240, seed));
+  const SaftPairPool pool = generate_saft_pairs(images, g);
+  std::mt19937_64 rng(rng_seed);
+  const int split = static_cast<int>(pool.size() * train_share);
+  ScenePairs out;
+  out.pool_size = pool.size();
+  out.train = labelled(pool, 0, split, rng);
+  out.held = labelled(pool, split, pool.size(), rng);
+  return out;
+}
+
+TEST(SaftOnlineTrainer, FineTuningRaisesHeldOutAccuracyOnTheScene) {
+  // An untrained net (random weights) learns the scene's pairs: its accuracy on pairs of
+  // keypoints it never trained on must rise well above the start.
+  const auto [train, held, pool_size] = scene_pairs({21, 22}, 0.75, 3);
+  ASSERT_GT(pool_size, 400);
   SaftNetworkOptions o;
   o.batch_size = 64;
   SaftNetwork start(o, 5);
@@ -116,14 +132,8 @@ TEST(SaftOnlineTrainer, RestoreGoesBackToTheSnapshotExactly) {
   // The hand-over check (slam::SaftLearningOptions::handover_check) refuses a pass by going
   // back to the state before it: the same weights and decision, so the same accuracy on any
   // pairs, and the trainer can learn on from there.
-  SaftPairGeneratorOptions g;
-  g.keypoints_per_image = 200;
-  g.warps_per_image = 2;
-  const SaftPairPool pool = generate_saft_pairs({test::textured_image(320, 240, 23)}, g);
-  ASSERT_GT(pool.size(), 100);
-  std::mt19937_64 rng(4);
-  const int split = pool.size() / 2;
-  const SaftLabelledPairs train = labelled(pool, 0, split, rng), held = labelled(pool, split, pool.size(), rng);
+  const auto [train, held, pool_size] = scene_pairs({23}, 0.5, 4);
+  ASSERT_GT(pool_size, 100);
   SaftNetworkOptions o;
   o.batch_size = 64;
   SaftNetwork start(o, 7);
@@ -147,14 +157,8 @@ TEST(SaftOnlineTrainer, CheckedPassKeepsWhatHelpsTheHeldOutPairsAndRefusesWhatHu
   // held-out accuracy well above the start. Then, from that trained state, one pass with a
   // step far too large (learning rate 10: it overshoots): the held-out pairs are judged worse,
   // the pass is refused, and the trainer is exactly where the pass started.
-  SaftPairGeneratorOptions g;
-  g.keypoints_per_image = 200;
-  g.warps_per_image = 2;
-  const SaftPairPool pool = generate_saft_pairs({test::textured_image(320, 240, 24)}, g);
-  ASSERT_GT(pool.size(), 200);
-  std::mt19937_64 rng(5);
-  const int split = pool.size() * 3 / 4;
-  const SaftLabelledPairs train = labelled(pool, 0, split, rng), held = labelled(pool, split, pool.size(), rng);
+  const auto [train, held, pool_size] = scene_pairs({24}, 0.75, 5);
+  ASSERT_GT(pool_size, 200);
   SaftNetworkOptions o;
   o.batch_size = 64;
   SaftNetwork start(o, 8);
