@@ -74,13 +74,10 @@ nlohmann::json run_slam(const SlamOptions& opt) {
                                      std::pair{"--depth-link-weight", opt.depth_link_weight},
                                      std::pair{"--depth-prior", opt.depth_prior}})
     if (!std::isfinite(value)) throw InputError(std::string(flag) + ": not a number");
-  {
-    slam::SystemOptions flags_only;  // the descriptor flags are checked before the dataset is read
-    opt.features.apply(flags_only);
-  }
+  slam::SystemOptions so;
+  opt.features.apply(so);  // the descriptor flags, checked before the dataset is read
   const TumDataset data = TumDataset::open(opt.dataset, opt.camera);
   const auto camera_file = opt.camera.empty() ? opt.dataset / "camera.yaml" : opt.camera;
-  slam::SystemOptions so;
   so.orb = OrbExtractorOptions::from_settings(SettingsFile::load(camera_file));
   so.mapping_thread = !opt.sync_mapping;
   so.vocabulary = opt.vocabulary;
@@ -98,7 +95,6 @@ nlohmann::json run_slam(const SlamOptions& opt) {
     so.tracking.motion_prior_sigma_m = opt.motion_prior_cm / 100.0;
     so.tracking.motion_prior_sigma_rad = opt.motion_prior_deg * M_PI / 180.0;
   }
-  opt.features.apply(so);
   so.saft_learning.synchronous = opt.sync_mapping;  // reproducible: learning inline too
   opt.features.check_outputs();
   // Fail on an unwritable output before spending minutes on the sequence.

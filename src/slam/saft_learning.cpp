@@ -193,27 +193,24 @@ std::pair<SaftLabelledPairs, SaftLabelledPairs> hold_out_pairs(const SaftLabelle
 }
 
 bool SaftLearning::train(const SaftLabelledPairs& batch) {
-  if (options_.handover_check && options_.mode == SaftLearningMode::kContinuous && batch.size() >= 8) {
-    const auto [part, held] = hold_out_pairs(batch, 4);
-    const auto checked = trainer_->train_checked(part, held);
-    std::vector<float> w = checked.kept ? trainer_->weights() : std::vector<float>();
-    std::lock_guard lock(mutex_);
-    ++stats_.passes;
-    if (stats_.passes == 1) stats_.first_accuracy = checked.step.accuracy;
-    stats_.last_accuracy = checked.step.accuracy;
-    if (stop_) return false;
-    if (checked.kept)
-      published_ = std::move(w);
-    else
-      ++stats_.handovers_refused;
-    return true;
-  }
   // Continuous: one pass, then publish. Discrete: pass over the batch until the target
   // accuracy or max_passes, then publish (both modes publish after every consumed batch;
-  // discrete's weights come later and fit an older batch more closely).
+  // discrete's weights come later and fit an older batch more closely). Continuous with the
+  // hand-over check: one pass over three quarters, published only if the held-out quarter's
+  // accuracy did not fall (else the trainer is back where it was).
+  const bool checked = options_.handover_check && options_.mode == SaftLearningMode::kContinuous && batch.size() >= 8;
   const int passes = options_.mode == SaftLearningMode::kDiscrete ? std::max(1, options_.max_passes) : 1;
+  bool publish = true;
   for (int pass = 0; pass < passes; ++pass) {
-    const SaftTrainingStep step = trainer_->train(batch);
+    SaftTrainingStep step;
+    if (checked) {
+      const auto [part, held] = hold_out_pairs(batch, 4);
+      const auto result = trainer_->train_checked(part, held);
+      step = result.step;
+      publish = result.kept;
+    } else {
+      step = trainer_->train(batch);
+    }
     std::lock_guard lock(mutex_);
     ++stats_.passes;
     if (stats_.passes == 1) stats_.first_accuracy = step.accuracy;
@@ -223,6 +220,11 @@ bool SaftLearning::train(const SaftLabelledPairs& batch) {
       ++stats_.target_reached;
       break;
     }
+  }
+  if (!publish) {
+    std::lock_guard lock(mutex_);
+    ++stats_.handovers_refused;
+    return true;
   }
   std::vector<float> w = trainer_->weights();
   std::lock_guard lock(mutex_);
