@@ -10,7 +10,11 @@
 # with local mapping in its thread (as a user runs it), plus tracked frames, frames per
 # second and, for the learning modes, frames per weight update. Online learning runs in its
 # own thread, so runs differ: that is why the median. METHODS may add `checked`: continuous
-# with --saft-handover-check (a held-out quarter of each batch gates the hand-over).
+# with --saft-handover-check (a held-out quarter of each batch gates the hand-over), and
+# `calibrated`: continuous with --saft-calibrate-decision (the hinge decision fitted to the
+# pre-trained net on the first batch).
+# EXTRA adds flags to every SAFT run (for example another net: --saft-weights W --vocabulary V)
+# and TAG names the output folder (bench-out/saft_slam-TAG), so such runs keep their own cache.
 #   RUNS=5 FRAMES=300 bash bench/saft_slam_table.sh   -> bench-out/saft_slam/table.md, table.json
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -19,15 +23,18 @@ FRAMES=${FRAMES:-300}
 METHODS=${METHODS:-"orb offline continuous discrete"}
 SEQUENCES=${SEQUENCES:-"lab-room low-texture blurred blurred-33ms fading kitchen"}
 B=$PWD/build/release/apps/builtscene/builtscene
-OUT=$PWD/bench-out/saft_slam
+EXTRA=${EXTRA:-}
+TAG=${TAG:-}
+OUT=$PWD/bench-out/saft_slam${TAG:+-$TAG}
+DATA=$PWD/bench-out/saft_slam/data
 mkdir -p "$OUT"
 dataset() {
   case $1 in
-    lab-room) echo "$OUT/data/lab-room" ;;
-    low-texture) echo "$OUT/data/low-texture" ;;
-    blurred) echo "$OUT/data/blurred" ;;
-    blurred-33ms) echo "$OUT/data/blurred-33ms" ;;
-    fading) echo "$OUT/data/fading" ;;
+    lab-room) echo "$DATA/lab-room" ;;
+    low-texture) echo "$DATA/low-texture" ;;
+    blurred) echo "$DATA/blurred" ;;
+    blurred-33ms) echo "$DATA/blurred-33ms" ;;
+    fading) echo "$DATA/fading" ;;
     kitchen) echo "$PWD/../shared/data/7scenes-kitchen" ;;
   esac
 }
@@ -54,8 +61,11 @@ for seq in $SEQUENCES; do
       case $method in
         orb) args=(--descriptor orb) ;;
         checked) args=(--descriptor saft --saft-mode continuous --saft-handover-check) ;;
+        calibrated) args=(--descriptor saft --saft-mode continuous --saft-calibrate-decision) ;;
         *) args=(--descriptor saft --saft-mode "$method") ;;
       esac
+      # shellcheck disable=SC2206
+      [ "$method" = orb ] || args+=($EXTRA)
       "$B" slam --dataset "$d" --max-frames "$FRAMES" --trajectory "$OUT/$tag.txt" "${args[@]}" \
         --inliers-out "$OUT/$tag.inliers.csv" --json > "$OUT/$tag.json" 2> "$OUT/$tag.log" || true
       "$B" eval ate --gt "$d/groundtruth.txt" --est "$OUT/$tag.txt" --json > "$OUT/$tag.ate.json" 2>> "$OUT/$tag.log" \
@@ -69,7 +79,7 @@ import json, os, statistics, sys
 out, runs, frames = sys.argv[1], int(sys.argv[2]), int(sys.argv[3])
 seqs, methods = sys.argv[4].split(), sys.argv[5].split()
 names = {"orb": "ORB", "offline": "offline SAFT", "continuous": "continuous SAFT", "discrete": "discrete SAFT",
-         "checked": "continuous SAFT, hand-over check"}
+         "checked": "continuous SAFT, hand-over check", "calibrated": "continuous SAFT, calibrated decision"}
 rows, table = [], {}
 for s in seqs:
     for m in methods:

@@ -28,6 +28,9 @@ void DescriptorOptions::add_to(CLI::App& cmd) {
   cmd.add_flag("--saft-handover-check", saft_handover_check,
                "Continuous SAFT: hold out a quarter of each batch and hand the new weights over only if the "
                "accuracy on it did not fall (else go back; docs/saft.md)");
+  cmd.add_flag("--saft-calibrate-decision", saft_calibrate_decision,
+               "SAFT online learning: fit the hinge decision to the pre-trained net on the first batch before the "
+               "first step (docs/saft.md)");
   cmd.add_option("--saft-weights-out", saft_weights_out, "Output: the SAFT weights at the end of the run (fine-tuned)");
   cmd.add_option("--inliers-out", inliers_out,
                  "Output: CSV per frame of matches and inliers after the initial pose and after local-map tracking");
@@ -46,6 +49,9 @@ void DescriptorOptions::apply(slam::SystemOptions& so) const {
   if (!(saft_anchor >= 0 && saft_anchor < 1e6)) throw InputError("--saft-anchor: expected a value >= 0, got " + std::to_string(saft_anchor));
   so.saft_learning.anchor_weight = saft_anchor;
   so.saft_learning.handover_check = saft_handover_check;
+  so.saft_learning.calibrate_decision = saft_calibrate_decision;
+  if (saft_calibrate_decision && so.saft_learning.mode == slam::SaftLearningMode::kOffline)
+    throw InputError("--saft-calibrate-decision needs --saft-mode continuous or discrete");
   if (saft_handover_check && so.saft_learning.mode != slam::SaftLearningMode::kContinuous)
     throw InputError("--saft-handover-check needs --saft-mode continuous");
   if (so.descriptor == DescriptorChoice::kOrb && (!saft_weights.empty() || saft_mode != "offline" || !saft_weights_out.empty()))
@@ -99,9 +105,12 @@ nlohmann::json TrackingDiagnostics::summary(slam::System& system, const Descript
                  {"target_reached", s.target_reached},
                  {"handover_check", learning->options().handover_check},
                  {"handovers_refused", s.handovers_refused},
+                 {"calibrate_decision", learning->options().calibrate_decision},
                  {"frames_per_update", s.weight_updates > 0 ? static_cast<double>(rows_.size()) / s.weight_updates : 0.0},
                  {"first_accuracy", s.first_accuracy},
-                 {"last_accuracy", s.last_accuracy}};
+                 {"last_accuracy", s.last_accuracy},
+                 {"decision_first", {{"w", s.first_decision.w}, {"b", s.first_decision.b}}},
+                 {"decision_last", {{"w", s.last_decision.w}, {"b", s.last_decision.b}}}};
     if (!opt.saft_weights_out.empty()) {
       system.saft_extractor()->network().save(opt.saft_weights_out);
       j["saft"]["weights_out"] = opt.saft_weights_out.string();

@@ -23,6 +23,7 @@ struct DescriptorOptions {
   double saft_target_accuracy = 0.98;
   double saft_anchor = 1.0;
   bool saft_handover_check = false;
+  bool saft_calibrate_decision = false;
   std::filesystem::path saft_weights_out;
   std::filesystem::path inliers_out;
 

@@ -1,6 +1,7 @@
 #include "features/saft_trainer.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <numeric>
 #include <random>
@@ -163,6 +164,7 @@ struct SaftOnlineTrainer::Impl {
   std::unique_ptr<torch::optim::SGD> optimizer;
   std::mt19937_64 rng;
   int steps = 0;
+  bool calibrated = false;
 
   // Hinge loss and accuracy of pairs [index] (first / second already augmented rows).
   // Plus, when anchored, anchor_weight times the mean squared distance of each descriptor to
@@ -200,11 +202,71 @@ SaftOnlineTrainer::SaftOnlineTrainer(const SaftNetwork& start, SaftOnlineOptions
 
 SaftOnlineTrainer::~SaftOnlineTrainer() = default;
 
+double saft_hinge_loss(const SaftDecision& decision, const std::vector<double>& d2, const std::vector<int>& label) {
+  CV_Assert(d2.size() == label.size());
+  if (d2.empty()) return 0.0;
+  double sum = 0;
+  for (std::size_t i = 0; i < d2.size(); ++i) sum += std::max(0.0, 1.0 - label[i] * decision.w * (decision.b - d2[i]));
+  return sum / static_cast<double>(d2.size());
+}
+
+SaftDecision fit_saft_decision(const std::vector<double>& d2, const std::vector<int>& label) {
+  CV_Assert(d2.size() == label.size());
+  SaftDecision best;
+  if (d2.empty()) return best;
+  double best_loss = saft_hinge_loss(best, d2, label);
+  for (int k = -8; k <= 32; ++k) {  // w = 2^(k/8): 0.5 ... 16
+    const double w = std::pow(2.0, k / 8.0);
+    // For a fixed w the mean hinge is convex and piecewise linear in b, with its kinks where a
+    // pair sits exactly on its margin (b = d^2 +- 1/w): its least value is at one of them.
+    for (const double d : d2)
+      for (const double b : {d - 1.0 / w, d + 1.0 / w}) {
+        const double loss = saft_hinge_loss({w, b}, d2, label);
+        if (loss < best_loss - 1e-12) best_loss = loss, best = {w, b};
+      }
+  }
+  return best;
+}
+
+std::vector<double> SaftOnlineTrainer::squared_distances(const SaftLabelledPairs& pairs) {
+  std::vector<double> out;
+  const int n = pairs.size();
+  if (n == 0) return out;
+  torch::set_num_threads(impl_->options.threads);
+  c10::InferenceMode guard;
+  auto& net = impl_->network.impl_->net;
+  net->eval();
+  const auto unit = torch::nn::functional::NormalizeFuncOptions().dim(1);
+  const torch::Tensor x =
+      torch::cat({to_tensor(normalize_saft_patches(pairs.first)), to_tensor(normalize_saft_patches(pairs.second))});
+  const torch::Tensor d = torch::nn::functional::normalize(net->forward(x), unit);
+  const torch::Tensor d2 = (d.narrow(0, 0, n) - d.narrow(0, n, n)).pow(2).sum(1).contiguous();
+  out.assign(d2.data_ptr<float>(), d2.data_ptr<float>() + n);
+  return out;
+}
+
+SaftDecision SaftOnlineTrainer::decision() const { return {impl_->w.item<double>(), impl_->b.item<double>()}; }
+
+SaftDecision SaftOnlineTrainer::calibrate_decision(const SaftLabelledPairs& pairs) {
+  const SaftDecision fit = fit_saft_decision(squared_distances(pairs), pairs.label);
+  torch::NoGradGuard no_grad;
+  impl_->w.fill_(fit.w);
+  impl_->b.fill_(fit.b);
+  return fit;
+}
+
+void SaftOnlineTrainer::calibrate_once(const SaftLabelledPairs& pairs) {
+  if (!impl_->options.calibrate_decision || impl_->calibrated || pairs.size() == 0) return;
+  calibrate_decision(pairs);
+  impl_->calibrated = true;
+}
+
 SaftTrainingStep SaftOnlineTrainer::train(const SaftLabelledPairs& pairs) {
   SaftTrainingStep result;
   const int n = pairs.size();
   if (n == 0) return result;
   CV_Assert(pairs.second.rows == n && static_cast<int>(pairs.label.size()) == n);
+  calibrate_once(pairs);
   torch::set_num_threads(impl_->options.threads);
   auto& net = impl_->network.impl_->net;
   net->eval();  // frozen batch-norm statistics, see the header
@@ -251,6 +313,7 @@ double SaftOnlineTrainer::accuracy(const SaftLabelledPairs& pairs) {
 SaftOnlineTrainer::CheckedStep SaftOnlineTrainer::train_checked(const SaftLabelledPairs& train,
                                                                 const SaftLabelledPairs& held) {
   CheckedStep out;
+  calibrate_once(train);  // before the snapshot: a refused first pass keeps the calibration
   const std::vector<float> before = snapshot();
   out.held_before = accuracy(held);
   out.step = this->train(train);

@@ -72,9 +72,24 @@ struct SaftOnlineOptions {
   // recognition. 0 turns it off. docs/saft.md has the measurements.
   double anchor_weight = 1.0;
   int batch_pairs = 128;        // pairs per optimizer step
+  // Before the first step, fit the hinge decision (w, b) to the starting net's distances on
+  // the first batch (calibrate_decision), so the first steps move the descriptor only where
+  // the net is wrong, not towards a decision that starts at arbitrary values (w = 2, b = 1).
+  bool calibrate_decision = false;
   std::uint64_t seed = 1;
   int threads = 1;
 };
+
+// The hinge decision o = w (b - d^2) on squared descriptor distances d^2.
+struct SaftDecision {
+  double w = 2.0, b = 1.0;
+};
+// Mean hinge loss max(0, 1 - y w (b - d^2)) of the decision over labelled squared distances.
+double saft_hinge_loss(const SaftDecision& decision, const std::vector<double>& d2, const std::vector<int>& label);
+// The decision of least mean hinge loss over w in [0.5, 16] (a log grid, 2^(1/8) apart) and,
+// for each w, the exact best b. Only a better loss than the default decision's replaces it;
+// ties keep the smaller w. Empty input: the default decision.
+SaftDecision fit_saft_decision(const std::vector<double>& d2, const std::vector<int>& label);
 
 // Owns a copy of the network being fine-tuned (the prediction net stays the caller's), a
 // frozen copy of the starting weights (the anchor), and the optimizer state across calls. Batch-norm statistics stay frozen at the pre-trained
@@ -93,6 +108,13 @@ class SaftOnlineTrainer {
   SaftTrainingStep train(const SaftLabelledPairs& pairs);
   // Accuracy of the current weights on `pairs` (no augmentation, no update).
   double accuracy(const SaftLabelledPairs& pairs);
+  // Squared L2 distances of the pairs' normalized descriptors under the current weights.
+  std::vector<double> squared_distances(const SaftLabelledPairs& pairs);
+  SaftDecision decision() const;
+  // Sets the decision to fit_saft_decision on `pairs` with the current weights (the network
+  // is not changed). train() does this itself before its first step when
+  // SaftOnlineOptions::calibrate_decision is set.
+  SaftDecision calibrate_decision(const SaftLabelledPairs& pairs);
   // One pass over `train`, kept only if the accuracy on `held` (pairs it does not train on)
   // did not fall; otherwise the trainer goes back to its state before the pass (restore()).
   struct CheckedStep {
@@ -109,6 +131,7 @@ class SaftOnlineTrainer {
   void restore(const std::vector<float>& state);  // std::invalid_argument on a wrong size
 
  private:
+  void calibrate_once(const SaftLabelledPairs& pairs);  // the first call's pairs, when the option is set
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };

@@ -41,6 +41,7 @@ SaftLearning::SaftLearning(SaftExtractor& extractor, SaftLearningOptions options
   if (options_.mode == SaftLearningMode::kOffline) return;
   trainer_ = std::make_unique<SaftOnlineTrainer>(
       extractor_.network(), SaftOnlineOptions{.learning_rate = options_.learning_rate, .anchor_weight = options_.anchor_weight, .batch_pairs = 128,
+                                            .calibrate_decision = options_.calibrate_decision,
                                             .seed = options_.seed});
   if (!options_.synchronous) thread_ = std::thread([this] { run(); });
 }
@@ -213,8 +214,10 @@ bool SaftLearning::train(const SaftLabelledPairs& batch) {
     }
     std::lock_guard lock(mutex_);
     ++stats_.passes;
-    if (stats_.passes == 1) stats_.first_accuracy = step.accuracy;
+    const SaftDecision decision = trainer_->decision();
+    if (stats_.passes == 1) stats_.first_accuracy = step.accuracy, stats_.first_decision = decision;
     stats_.last_accuracy = step.accuracy;
+    stats_.last_decision = decision;
     if (stop_) return false;
     if (options_.mode == SaftLearningMode::kDiscrete && step.accuracy >= options_.target_accuracy) {
       ++stats_.target_reached;

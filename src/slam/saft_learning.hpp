@@ -70,6 +70,8 @@ struct SaftLearningOptions {
   // else the learner goes back to the weights it had (and drops its momentum). Off: the source's hand-over after
   // every batch.
   bool handover_check = false;
+  // See SaftOnlineOptions::calibrate_decision: fit the hinge decision to the pre-trained net on the first batch.
+  bool calibrate_decision = false;
   // No learning thread: prepare() trains on each batch itself, so the weights a frame is
   // described with depend on the frames alone (reproducible runs: `--sync-mapping`; tests).
   // Much slower, and no batch is ever dropped.
@@ -97,6 +99,7 @@ class SaftLearning {
     long target_reached = 0;    // discrete: batches released by target_accuracy (the others by max_passes)
     long handovers_refused = 0; // handover_check: batches whose held-out accuracy fell (weights kept back)
     double last_accuracy = 0;   // of the last pass
+    SaftDecision first_decision, last_decision;  // the hinge decision after the first and the last pass
     double first_accuracy = 0;  // of the first pass (the pre-trained net on this scene)
   };
 

@@ -136,7 +136,8 @@ TEST_F(SlamCommand, BadPriorAndLinkValuesAreUsageErrorsNamingTheFlag) {
                                    std::pair{" --depth-prior-below -3", "--depth-prior-below"},
                                    std::pair{" --descriptor saft --saft-handover-check", "--saft-handover-check"},
                                    std::pair{" --descriptor saft --saft-mode discrete --saft-handover-check",
-                                             "--saft-handover-check"}}) {
+                                             "--saft-handover-check"},
+                                   std::pair{" --descriptor saft --saft-calibrate-decision", "--saft-calibrate-decision"}}) {
     const auto r = run_cli(base + args);
     EXPECT_EQ(r.exit_code, 2) << args;
     EXPECT_NE(r.err.find(flag), std::string::npos) << args << ": " << r.err;
