@@ -107,14 +107,19 @@ ScenePairs scene_pairs(const std::vector<int>& image_seeds, double train_share, 
   return out;
 }
 
+// A net with fresh seeded weights (batches of 64 patches).
+SaftNetwork untrained_net(unsigned seed) {
+  SaftNetworkOptions o;
+  o.batch_size = 64;
+  return SaftNetwork(o, seed);
+}
+
 TEST(SaftOnlineTrainer, FineTuningRaisesHeldOutAccuracyOnTheScene) {
   // An untrained net (random weights) learns the scene's pairs: its accuracy on pairs of
   // keypoints it never trained on must rise well above the start.
   const auto [train, held, pool_size] = scene_pairs({21, 22}, 0.75, 3);
   ASSERT_GT(pool_size, 400);
-  SaftNetworkOptions o;
-  o.batch_size = 64;
-  SaftNetwork start(o, 5);
+  SaftNetwork start = untrained_net(5);
   SaftOnlineTrainer trainer(start, {.learning_rate = 1e-2, .anchor_weight = 0.0, .batch_pairs = 128, .seed = 1});
   const double before = trainer.accuracy(held);
   SaftTrainingStep last;
@@ -124,7 +129,7 @@ TEST(SaftOnlineTrainer, FineTuningRaisesHeldOutAccuracyOnTheScene) {
   EXPECT_GT(after, before + 0.1);
   EXPECT_GT(after, 0.8);
   // The prediction net gets exactly the trained weights.
-  SaftNetwork predicted(o, 6);
+  SaftNetwork predicted = untrained_net(6);
   predicted.set_weights(trainer.weights());
   EXPECT_EQ(predicted.weights(), trainer.weights());
   EXPECT_NE(start.weights(), trainer.weights());
@@ -136,9 +141,7 @@ TEST(SaftOnlineTrainer, RestoreGoesBackToTheSnapshotExactly) {
   // pairs, and the trainer can learn on from there.
   const auto [train, held, pool_size] = scene_pairs({23}, 0.5, 4);
   ASSERT_GT(pool_size, 100);
-  SaftNetworkOptions o;
-  o.batch_size = 64;
-  SaftNetwork start(o, 7);
+  SaftNetwork start = untrained_net(7);
   SaftOnlineTrainer trainer(start, {.learning_rate = 1e-2, .anchor_weight = 0.0, .batch_pairs = 64, .seed = 2});
   const std::vector<float> before = trainer.snapshot();
   EXPECT_EQ(static_cast<long>(before.size()), start.parameter_count() + 2);  // weights, then the decision's w and b
@@ -161,9 +164,7 @@ TEST(SaftOnlineTrainer, CheckedPassKeepsWhatHelpsTheHeldOutPairsAndRefusesWhatHu
   // the pass is refused, and the trainer is exactly where the pass started.
   const auto [train, held, pool_size] = scene_pairs({24}, 0.75, 5);
   ASSERT_GT(pool_size, 200);
-  SaftNetworkOptions o;
-  o.batch_size = 64;
-  SaftNetwork start(o, 8);
+  SaftNetwork start = untrained_net(8);
   const SaftOnlineOptions options{.learning_rate = 1e-2, .anchor_weight = 0.0, .batch_pairs = 128, .seed = 3};
 
   SaftOnlineTrainer good(start, options);
@@ -234,9 +235,7 @@ TEST(SaftOnlineTrainer, CalibrationFitsTheDecisionToTheStartingNetOnly) {
   // the first train() calibrates before its first step.
   const auto [train, held, pool_size] = scene_pairs({25}, 0.75, 6);
   ASSERT_GT(pool_size, 200);
-  SaftNetworkOptions o;
-  o.batch_size = 64;
-  SaftNetwork start(o, 9);
+  SaftNetwork start = untrained_net(9);
   SaftOnlineTrainer trainer(start, {.learning_rate = 1e-2, .anchor_weight = 0.0, .batch_pairs = 128, .seed = 4});
   const std::vector<double> d2 = trainer.squared_distances(train);
   ASSERT_EQ(static_cast<int>(d2.size()), train.size());
