@@ -34,11 +34,11 @@ for method in $METHODS; do
     # shellcheck disable=SC2206
     [ "$method" = orb ] || args+=($EXTRA)
     "$B" slam --dataset "$D" --trajectory "$OUT/$tag.txt" "${args[@]}" --json > "$OUT/$tag.json" 2> "$OUT/$tag.log" || true
-    tracked=$(python3 -c "import json,sys; print(json.load(open(sys.argv[1]))['tracked_frames'])" "$OUT/$tag.json" 2>/dev/null || echo "?")
-    frames=$(python3 -c "import json,sys; print(json.load(open(sys.argv[1]))['frames'])" "$OUT/$tag.json" 2>/dev/null || echo "?")
+    counts=$(python3 -c "import json,sys; j = json.load(open(sys.argv[1])); print('%d/%d' % (j['tracked_frames'], j['frames']))" \
+             "$OUT/$tag.json" 2>/dev/null || echo "?/?")
     ate=$("$B" eval ate --gt "$D/groundtruth.txt" --est "$OUT/$tag.txt" --json 2>/dev/null \
           | python3 -c "import json,sys; print('%.2f cm' % (100 * json.load(sys.stdin)['rmse']))" 2>/dev/null || echo "-")
-    line="$line $tracked/$frames ($ate);"
+    line="$line $counts ($ate);"
   done
   echo "$line"
 done

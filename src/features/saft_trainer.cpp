@@ -169,14 +169,25 @@ struct SaftOnlineTrainer::Impl {
   // Hinge loss and accuracy of pairs [index] (first / second already augmented rows).
   // Plus, when anchored, anchor_weight times the mean squared distance of each descriptor to
   // the reference net's descriptor of the same patch.
+  // The pairs' patches as one input batch (first rows, then second rows), their normalized
+  // descriptors under the current weights, and each pair's squared distance.
+  struct DescribedPairs {
+    torch::Tensor x, d, d2;
+  };
+  DescribedPairs describe_pairs(const cv::Mat& first, const cv::Mat& second) {
+    const int n = first.rows;
+    DescribedPairs out;
+    out.x = torch::cat({to_tensor(normalize_saft_patches(first)), to_tensor(normalize_saft_patches(second))});
+    out.d = torch::nn::functional::normalize(network.impl_->net->forward(out.x), kUnitRows);
+    out.d2 = (out.d.narrow(0, 0, n) - out.d.narrow(0, n, n)).pow(2).sum(1);
+    return out;
+  }
+  static inline const auto kUnitRows = torch::nn::functional::NormalizeFuncOptions().dim(1);
+
   std::pair<torch::Tensor, double> loss_of(const cv::Mat& first, const cv::Mat& second, const std::vector<int>& labels,
                                            bool anchored) {
     const int n = first.rows;
-    auto& net = network.impl_->net;
-    const auto unit = torch::nn::functional::NormalizeFuncOptions().dim(1);
-    const torch::Tensor x = torch::cat({to_tensor(normalize_saft_patches(first)), to_tensor(normalize_saft_patches(second))});
-    const torch::Tensor d = torch::nn::functional::normalize(net->forward(x), unit);
-    const torch::Tensor d2 = (d.narrow(0, 0, n) - d.narrow(0, n, n)).pow(2).sum(1);
+    const auto [x, d, d2] = describe_pairs(first, second);
     std::vector<float> y(labels.begin(), labels.end());
     const torch::Tensor yt = torch::from_blob(y.data(), {n}, torch::kFloat32).clone();
     const torch::Tensor o = w * (b - d2);
@@ -186,7 +197,7 @@ struct SaftOnlineTrainer::Impl {
       {
         torch::NoGradGuard no_grad;
         reference.impl_->net->eval();
-        r = torch::nn::functional::normalize(reference.impl_->net->forward(x), unit);
+        r = torch::nn::functional::normalize(reference.impl_->net->forward(x), kUnitRows);
       }
       loss = loss + options.anchor_weight * (d - r).pow(2).sum(1).mean();
     }
@@ -234,13 +245,8 @@ std::vector<double> SaftOnlineTrainer::squared_distances(const SaftLabelledPairs
   if (n == 0) return out;
   torch::set_num_threads(impl_->options.threads);
   c10::InferenceMode guard;
-  auto& net = impl_->network.impl_->net;
-  net->eval();
-  const auto unit = torch::nn::functional::NormalizeFuncOptions().dim(1);
-  const torch::Tensor x =
-      torch::cat({to_tensor(normalize_saft_patches(pairs.first)), to_tensor(normalize_saft_patches(pairs.second))});
-  const torch::Tensor d = torch::nn::functional::normalize(net->forward(x), unit);
-  const torch::Tensor d2 = (d.narrow(0, 0, n) - d.narrow(0, n, n)).pow(2).sum(1).contiguous();
+  impl_->network.impl_->net->eval();
+  const torch::Tensor d2 = impl_->describe_pairs(pairs.first, pairs.second).d2.contiguous();
   out.assign(d2.data_ptr<float>(), d2.data_ptr<float>() + n);
   return out;
 }
