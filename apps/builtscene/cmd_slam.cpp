@@ -41,6 +41,8 @@ struct SlamOptions {
   bool no_loop_closing = false;
   bool depth_links = false;
   double depth_link_weight = 1.0;
+  bool depth_planes = false;
+  double depth_plane_weight = 1.0;
   double motion_prior_cm = 0, motion_prior_deg = 0.3;
   double depth_prior = slam::TrackingOptions{}.depth_prior_weight;
   int depth_prior_below = slam::TrackingOptions{}.depth_prior_below_inliers;
@@ -72,6 +74,7 @@ nlohmann::json run_slam(const SlamOptions& opt) {
   for (const auto& [flag, value] : {std::pair{"--motion-prior", opt.motion_prior_cm},
                                      std::pair{"--motion-prior-deg", opt.motion_prior_deg},
                                      std::pair{"--depth-link-weight", opt.depth_link_weight},
+                                     std::pair{"--depth-plane-weight", opt.depth_plane_weight},
                                      std::pair{"--depth-prior", opt.depth_prior}})
     if (!std::isfinite(value)) throw InputError(std::string(flag) + ": not a number");
   slam::SystemOptions so;
@@ -85,6 +88,9 @@ nlohmann::json run_slam(const SlamOptions& opt) {
   so.loop_closing = !opt.no_loop_closing;
   so.tracking.depth_links = opt.depth_links;
   so.tracking.depth_link_weight = opt.depth_link_weight;
+  so.planes.enabled = opt.depth_planes;
+  so.planes.sigma_rad /= std::sqrt(opt.depth_plane_weight);
+  so.planes.sigma_m /= std::sqrt(opt.depth_plane_weight);
   so.tracking.depth_prior_weight = opt.depth_prior;
   so.tracking.depth_prior_below_inliers = opt.depth_prior_below;
   so.tracking.bridge_local_map_inliers = opt.bridge_local_map;
@@ -300,6 +306,13 @@ const bool registered_slam = register_command({
                    "to bundle adjustment (off by default: better on the corridor and lab room, worse on the office and the real kitchen; docs/slam.md)");
       cmd.add_option("--depth-link-weight", opt->depth_link_weight,
                      "With --depth-links: scale of the links' information (1 = independent 1 cm depth noise)")
+          ->capture_default_str()
+          ->check(CLI::Range(1e-6, 1e6));
+      cmd.add_flag("--depth-planes", opt->depth_planes,
+                   "Experimental: the walls, floor and ceiling in each keyframe's depth become plane landmarks "
+                   "shared by the keyframes that see them, held in bundle adjustment (docs/slam.md, \"Plane landmarks\")");
+      cmd.add_option("--depth-plane-weight", opt->depth_plane_weight,
+                     "With --depth-planes: scale of the planes' information (1 = 0.29 degrees and 1 cm per keyframe)")
           ->capture_default_str()
           ->check(CLI::Range(1e-6, 1e6));
       cmd.add_option("--motion-prior", opt->motion_prior_cm,

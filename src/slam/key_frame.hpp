@@ -17,6 +17,7 @@
 #include "slam/frame.hpp"
 #include "slam/id_order.hpp"
 #include "slam/local_bundle_adjuster.hpp"
+#include "slam/plane_landmark.hpp"
 
 namespace builtscene::slam {
 
@@ -77,6 +78,10 @@ class KeyFrame : public std::enable_shared_from_this<KeyFrame> {
   std::weak_ptr<KeyFrame> depth_link_to;
   SE3 depth_link_T;
   Eigen::Matrix<double, 6, 6> depth_link_information = Eigen::Matrix<double, 6, 6>::Zero();
+
+  // Planes measured in this keyframe's depth (set by tracking before the keyframe joins the
+  // map, with TrackingOptions::depth_planes) and their map planes (set by local mapping).
+  std::vector<KeyFramePlane> planes;
 
   // Bag of words of the keypoint descriptors and its direct index, set once when the keyframe
   // enters the KeyFrameDatabase (empty before). Guarded by the map lock like the rest.

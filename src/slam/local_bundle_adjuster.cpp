@@ -4,6 +4,7 @@
 
 #include <Eigen/Cholesky>
 #include <ceres/rotation.h>
+#include <ceres/sphere_manifold.h>
 
 #include "slam/reprojection_cost.hpp"
 
@@ -64,6 +65,23 @@ struct RelativePoseInfoCost {
   }
 };
 
+// A plane measured in a camera's depth (n_m, d_m; camera coordinates) against the world plane
+// (n, d) seen from the pose block (angle-axis, translation of T_cw): n_c = R n and
+// d_c = d - n_c.t; residuals (n_c - n_m) / sigma_rad (3) and (d_c - d_m) / sigma_m.
+struct PlaneCost {
+  Eigen::Vector3d n_m;
+  double d_m = 0, inv_sigma_rad = 200, inv_sigma_m = 100;
+  template <typename T>
+  bool operator()(const T* pose, const T* n, const T* d, T* r) const {
+    T nc[3];
+    ceres::AngleAxisRotatePoint(pose, n, nc);
+    const T dc = d[0] - (nc[0] * pose[3] + nc[1] * pose[4] + nc[2] * pose[5]);
+    for (int k = 0; k < 3; ++k) r[k] = (nc[k] - T(n_m[k])) * T(inv_sigma_rad);
+    r[3] = (dc - T(d_m)) * T(inv_sigma_m);
+    return true;
+  }
+};
+
 }  // namespace
 
 BundleAdjustmentResult solve_bundle_adjustment(const BundleAdjustmentProblem& pb, const BundleAdjustmentOptions& options,
@@ -73,8 +91,16 @@ BundleAdjustmentResult solve_bundle_adjustment(const BundleAdjustmentProblem& pb
   res.poses.resize(nc);
   for (std::size_t c = 0; c < nc; ++c) res.poses[c] = pb.cameras[c].T_cw;
   res.points = pb.points;
+  res.planes = pb.planes;
   res.measurement_inlier.assign(nm, true);
   if (nm == 0 || nc == 0) return res;
+  const std::size_t nplanes = pb.planes.size();
+  std::vector<double> plane_n(3 * nplanes), plane_d(nplanes);
+  for (std::size_t j = 0; j < nplanes; ++j) {
+    const Eigen::Vector3d n = pb.planes[j].n.normalized();
+    for (int k = 0; k < 3; ++k) plane_n[3 * j + k] = n[k];
+    plane_d[j] = pb.planes[j].d;
+  }
 
   std::vector<double> poses(6 * nc), points(3 * np);
   for (std::size_t c = 0; c < nc; ++c) detail::pose_to_block(pb.cameras[c].T_cw, &poses[6 * c]);
@@ -99,6 +125,8 @@ BundleAdjustmentResult solve_bundle_adjustment(const BundleAdjustmentProblem& pb
   res.initial_rms_px = rms(false);
 
   ceres::HuberLoss huber_mono(std::sqrt(kChi2Mono)), huber_stereo(std::sqrt(kChi2Stereo));
+  ceres::HuberLoss huber_plane(3.0);  // a plane joined to the wrong landmark pulls no harder than 3 sigma
+  ceres::SphereManifold<3> unit_normal;
   AbortCallback callback(abort);
   int free_cameras = 0;
   for (const auto& c : pb.cameras) free_cameras += !c.fixed;
@@ -106,6 +134,7 @@ BundleAdjustmentResult solve_bundle_adjustment(const BundleAdjustmentProblem& pb
   for (int phase = 0; phase < 2; ++phase) {
     ceres::Problem::Options po;
     po.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+    po.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
     ceres::Problem problem(po);
     const bool robust = phase == 0;
     std::vector<char> camera_used(nc, 0);
@@ -135,6 +164,17 @@ BundleAdjustmentResult solve_bundle_adjustment(const BundleAdjustmentProblem& pb
                                    Eigen::Quaterniond(rp.T_ij.rotation_matrix()), rp.T_ij.translation(), llt.matrixU()}),
                                nullptr, &poses[6 * i], &poses[6 * j]);
       camera_used[i] = camera_used[j] = 1;
+    }
+    std::vector<char> plane_used(nplanes, 0);
+    for (const auto& pm : pb.plane_measurements) {
+      const auto c = static_cast<std::size_t>(pm.camera), j = static_cast<std::size_t>(pm.plane);
+      if (c >= nc || j >= nplanes) continue;
+      problem.AddResidualBlock(new ceres::AutoDiffCostFunction<PlaneCost, 4, 6, 3, 1>(new PlaneCost{
+                                   pm.m.n_c, pm.m.d_c, 1.0 / pb.plane_sigma_rad, 1.0 / pb.plane_sigma_m}),
+                               &huber_plane, &poses[6 * c], &plane_n[3 * j], &plane_d[j]);
+      camera_used[c] = 1;
+      if (!plane_used[j]) problem.SetManifold(&plane_n[3 * j], &unit_normal);
+      plane_used[j] = 1;
     }
     if (pb.planar.enabled)
       for (std::size_t c = 0; c < nc; ++c)
@@ -173,6 +213,7 @@ BundleAdjustmentResult solve_bundle_adjustment(const BundleAdjustmentProblem& pb
   for (std::size_t c = 0; c < nc; ++c)
     if (!pb.cameras[c].fixed) res.poses[c] = detail::block_to_pose(&poses[6 * c]);
   for (std::size_t p = 0; p < np; ++p) res.points[p] = Eigen::Vector3d(&points[3 * p]);
+  for (std::size_t j = 0; j < nplanes; ++j) res.planes[j] = {Eigen::Vector3d(&plane_n[3 * j]).normalized(), plane_d[j]};
   res.final_rms_px = rms(true);
   return res;
 }

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "core/se3.hpp"
+#include "slam/depth_planes.hpp"
 #include "slam/observation.hpp"
 #include "slam/planar_motion.hpp"
 
@@ -40,6 +41,21 @@ struct BundleAdjustmentProblem {
   std::vector<RelativePose> relative_poses;
   // A ground robot's planar motion (planar_motion.hpp): a term on every free camera.
   PlanarMotion planar;
+  // Plane landmarks (plane_landmark.hpp): planes n.X + d = 0 in the world, refined with the
+  // poses, and the planes the cameras' depth measured (camera coordinates), each held with
+  // standard deviations plane_sigma_rad on the normal and plane_sigma_m on the distance.
+  struct Plane {
+    Eigen::Vector3d n = Eigen::Vector3d::UnitZ();
+    double d = 0;
+  };
+  struct PlaneObservation {
+    int camera = 0;
+    int plane = 0;
+    PlaneMeasurement m;
+  };
+  std::vector<Plane> planes;
+  std::vector<PlaneObservation> plane_measurements;
+  double plane_sigma_rad = 0.005, plane_sigma_m = 0.01;
 };
 
 struct BundleAdjustmentOptions {
@@ -50,6 +66,7 @@ struct BundleAdjustmentOptions {
 struct BundleAdjustmentResult {
   std::vector<SE3> poses;                 // per camera (fixed ones unchanged)
   std::vector<Eigen::Vector3d> points;
+  std::vector<BundleAdjustmentProblem::Plane> planes;
   std::vector<bool> measurement_inlier;   // per measurement, after the final iterations
   double initial_rms_px = 0;              // RMS reprojection error (pixels, all measurements)
   double final_rms_px = 0;                // RMS over the inliers at the end

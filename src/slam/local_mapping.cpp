@@ -157,6 +157,7 @@ void LocalMapping::process(const std::shared_ptr<KeyFrame>& kf) {
     std::lock_guard lock(map_.mutex());
     if (kf->bad) return;
     insert_into_map(*kf);
+    if (opt_.planes.enabled) associate_planes(*kf, map_, opt_.planes);
     cull_recent_points(*kf);
     if (opt_.triangulation) triangulate_with_neighbours(*kf);
   }
@@ -400,6 +401,7 @@ void LocalMapping::local_bundle_adjustment(KeyFrame& kf) {
     int index;
   };
   std::vector<Link> links;
+  std::vector<std::shared_ptr<MapPlane>> planes;
   {
     std::lock_guard lock(map_.mutex());
     if (kf.bad) return;
@@ -446,6 +448,7 @@ void LocalMapping::local_bundle_adjustment(KeyFrame& kf) {
       }
     }
     add_depth_links(cams, pb);
+    planes = add_plane_terms(cams, pb, opt_.planes, opt_.planes.anchors);
   }
   if (abort_ba_) return;
   const auto r = solve_bundle_adjustment(pb, {}, &abort_ba_);
@@ -472,6 +475,10 @@ void LocalMapping::local_bundle_adjustment(KeyFrame& kf) {
     if (pts[i]->bad) continue;
     pts[i]->position = r.points[i];
     pts[i]->update_normal_and_depth();
+  }
+  for (std::size_t j = 0; j < planes.size(); ++j) {
+    planes[j]->n_w = r.planes[j].n;
+    planes[j]->d_w = r.planes[j].d;
   }
 }
 

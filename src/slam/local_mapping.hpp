@@ -30,6 +30,7 @@ class MapPoint;
 
 struct LocalMappingOptions {
   PlanarMotion planar;             // a ground robot's planar motion in local BA (planar_motion.hpp)
+  PlaneLandmarkOptions planes;     // plane landmarks: associated here, refined in local BA (plane_landmark.hpp)
   float min_found_ratio = 0.25f;   // new points found in fewer of the frames predicting them are culled
   int min_observations = 3;        // ... and those seen by at most 2 keyframes after 2 keyframes (RGB-D)
   float redundant_ratio = 0.9f;    // keyframe culling

@@ -464,6 +464,7 @@ void LoopCloser::run_global_ba(long loop, long keyframe, long matched) {
   pb.planar = opt_.planar;
   std::vector<std::shared_ptr<KeyFrame>> cams;
   std::vector<std::shared_ptr<MapPoint>> pts;
+  std::vector<std::shared_ptr<MapPlane>> planes;
   {
     std::lock_guard lock(map_.mutex());
     const auto all = map_.keyframes();
@@ -517,6 +518,7 @@ void LoopCloser::run_global_ba(long loop, long keyframe, long matched) {
       }
     }
     add_depth_links(cams, pb);  // TrackingOptions::depth_links
+    planes = add_plane_terms(cams, pb, opt_.planes, 0);
   }
   {
     std::lock_guard s(stats_mutex_);
@@ -563,6 +565,10 @@ void LoopCloser::run_global_ba(long loop, long keyframe, long matched) {
       if (!moved.count(p.get()) && p->reference && before.count(p->reference))
         p->position = p->reference->pose_inverse() * (before[p->reference] * p->position);
       p->update_normal_and_depth();
+    }
+    for (std::size_t j = 0; j < planes.size(); ++j) {
+      planes[j]->n_w = r.planes[j].n;
+      planes[j]->d_w = r.planes[j].d;
     }
     event.stage = LoopEvent::Stage::kGlobalBundleAdjustment;
     event.loop = loop;

@@ -34,6 +34,7 @@
 #include <thread>
 
 #include "core/stage_timer.hpp"
+#include "slam/plane_landmark.hpp"
 #include "slam/loop_consistency.hpp"
 #include "slam/loop_event.hpp"
 
@@ -47,6 +48,7 @@ class LocalMapping;
 
 struct LoopClosingOptions {
   PlanarMotion planar;  // a ground robot's planar motion in global BA (planar_motion.hpp)
+  PlaneLandmarkOptions planes;  // plane landmarks in global BA (plane_landmark.hpp)
   int min_keyframes = 10;       // map size before loops are searched, and keyframes between two loops (ORB-SLAM2)
   int min_keyframe_gap = 20;    // candidates at least this many keyframe ids older (not the recent past)
   int consistency = 3;          // ORB-SLAM2's covisibility consistency threshold

@@ -39,7 +39,9 @@ void Map::clear() {
     kf->children.clear();
     kf->loop_edges.clear();
     kf->parent.reset();
+    kf->planes.clear();
   }
+  planes_.clear();
   for (auto& [k, p] : points_) {
     p->observations.clear();
     p->replaced_by.reset();

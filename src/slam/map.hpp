@@ -37,6 +37,10 @@ class Map {
   std::size_t keyframe_count() const { return keyframes_.size(); }
   std::size_t point_count() const { return points_.size(); }
   void clear();
+  // Plane landmarks (plane_landmark.hpp), in the order they were made.
+  void add_plane(const std::shared_ptr<MapPlane>& p) { planes_.push_back(p); }
+  const std::vector<std::shared_ptr<MapPlane>>& planes() const { return planes_; }
+  long next_plane_id() { return next_plane_id_++; }
 
   // Thread-safe id sources.
   long next_keyframe_id() { return next_kf_id_++; }
@@ -53,6 +57,8 @@ class Map {
   mutable std::mutex mutex_;
   std::unordered_map<KeyFrame*, std::shared_ptr<KeyFrame>> keyframes_;
   std::unordered_map<MapPoint*, std::shared_ptr<MapPoint>> points_;
+  std::vector<std::shared_ptr<MapPlane>> planes_;
+  long next_plane_id_ = 0;
   std::atomic<long> next_kf_id_{0}, next_point_id_{0};
 };
 

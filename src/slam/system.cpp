@@ -34,6 +34,7 @@ System::System(const RgbdCameraSettings& settings, SystemOptions options)
     learning_ = std::make_unique<SaftLearning>(*saft_, options_.saft_learning);
   }
   options_.tracking.planar = options_.mapping.planar = options_.loop.planar = options_.planar;
+  options_.tracking.planes = options_.mapping.planes = options_.loop.planes = options_.planes;
   planar_guess_ = options_.planar.up_c;
   // Planar motion's priors leave the corridor's plain start a few inliers short of the map,
   // and without the local map searched from the depth bridge's pose it never gets back

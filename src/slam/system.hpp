@@ -69,6 +69,9 @@ struct SystemOptions {
   // A ground robot's planar motion (planar_motion.hpp), off by default; System copies it into
   // the tracking, local mapping and loop closing options.
   PlanarMotion planar;
+  // Plane landmarks from the keyframes' depth (plane_landmark.hpp), off by default; copied
+  // likewise.
+  PlaneLandmarkOptions planes;
 };
 
 // A fingerprint of a vocabulary, stored in saved maps (never 0).

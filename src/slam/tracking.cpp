@@ -723,6 +723,11 @@ void Tracker::create_new_keyframe() {
   // No map point in common with the map (the depth-odometry bridge carried the pose): the
   // keyframe hangs on the one the bridge carried the pose from.
   if (shared == 0 && reference_) kf->odometry_parent = reference_;
+  if (opt_.planes.enabled && !depth_.empty()) {
+    const Intrinsics K = intrinsics_of(*ctx_);
+    for (const auto& m : extract_depth_planes(depth_, K.fx, K.fy, K.cx, K.cy, opt_.planes.extraction))
+      kf->planes.push_back({m, nullptr});
+  }
   // New map points from depth: all close keypoints, at least new_kf_min_points nearest ones.
   std::vector<std::pair<float, std::size_t>> by_depth;
   for (std::size_t i = 0; i < current_.size(); ++i)

@@ -19,6 +19,7 @@
 #include "slam/frame.hpp"
 #include "slam/matcher.hpp"
 #include "slam/planar_motion.hpp"
+#include "slam/plane_landmark.hpp"
 #include "slam/pose_optimizer.hpp"
 
 namespace builtscene::slam {
@@ -82,6 +83,8 @@ struct TrackingOptions {
   // A ground robot's planar motion (off by default; planar_motion.hpp): a prior in local-map
   // tracking's pose optimization.
   PlanarMotion planar;
+  // Plane landmarks (plane_landmark.hpp): each new keyframe's depth planes are measured here.
+  PlaneLandmarkOptions planes;
 };
 
 enum class TrackingState { kNotInitialized, kOk, kLost };

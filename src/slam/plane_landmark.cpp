@@ -1,0 +1,115 @@
+#include "slam/plane_landmark.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <unordered_map>
+
+#include "slam/key_frame.hpp"
+#include "slam/local_bundle_adjuster.hpp"
+#include "slam/map.hpp"
+
+namespace builtscene::slam {
+
+PlaneMeasurement plane_in_world(const PlaneMeasurement& m_c, const SE3& T_cw) {
+  // n_c.X_c + d_c = 0 with X_c = R X_w + t: (R^T n_c).X_w + (d_c + n_c.t) = 0.
+  PlaneMeasurement w = m_c;
+  w.n_c = T_cw.rotation_matrix().transpose() * m_c.n_c;
+  w.d_c = m_c.d_c + m_c.n_c.dot(T_cw.translation());
+  return w;
+}
+
+void associate_planes(KeyFrame& kf, Map& map, const PlaneLandmarkOptions& opt) {
+  const double cos_match = std::cos(opt.match_deg * M_PI / 180.0);
+  const Eigen::Vector3d centre = kf.camera_center();
+  std::vector<const MapPlane*> taken;
+  for (auto& p : kf.planes) {
+    if (p.landmark) continue;
+    const PlaneMeasurement w = plane_in_world(p.m, kf.pose());
+    std::shared_ptr<MapPlane> best;
+    double best_gap = opt.match_m;
+    for (const auto& mp : map.planes()) {
+      if (std::find(taken.begin(), taken.end(), mp.get()) != taken.end()) continue;
+      if (mp->n_w.dot(w.n_c) < cos_match || (mp->last_seen_from - centre).norm() > opt.match_range_m) continue;
+      const double gap = std::abs(mp->d_w - w.d_c);
+      if (gap < best_gap) best_gap = gap, best = mp;
+    }
+    if (!best) {
+      best = std::make_shared<MapPlane>();
+      best->id = map.next_plane_id();
+      best->n_w = w.n_c;
+      best->d_w = w.d_c;
+      map.add_plane(best);
+    }
+    std::erase_if(best->observers, [](const std::weak_ptr<KeyFrame>& o) {
+      const auto k = o.lock();
+      return !k || k->bad;
+    });
+    best->observers.push_back(kf.shared_from_this());
+    best->last_seen_from = centre;
+    taken.push_back(best.get());
+    p.landmark = best;
+  }
+}
+
+std::vector<std::shared_ptr<MapPlane>> add_plane_terms(std::vector<std::shared_ptr<KeyFrame>>& cams,
+                                                       BundleAdjustmentProblem& pb, const PlaneLandmarkOptions& opt,
+                                                       int anchors) {
+  std::vector<std::shared_ptr<MapPlane>> planes;
+  if (!opt.enabled) return planes;
+  pb.plane_sigma_rad = opt.sigma_rad;
+  pb.plane_sigma_m = opt.sigma_m;
+  std::unordered_map<const MapPlane*, int> index;
+  std::unordered_map<const KeyFrame*, int> in_problem;
+  for (std::size_t c = 0; c < cams.size(); ++c) in_problem[cams[c].get()] = static_cast<int>(c);
+  auto add_measurements = [&](std::size_t c, bool new_planes) {
+    for (const auto& p : cams[c]->planes) {
+      if (!p.landmark) continue;
+      auto it = index.find(p.landmark.get());
+      if (it == index.end()) {
+        if (!new_planes) continue;
+        it = index.emplace(p.landmark.get(), static_cast<int>(planes.size())).first;
+        planes.push_back(p.landmark);
+      }
+      pb.plane_measurements.push_back({static_cast<int>(c), it->second, p.m});
+    }
+  };
+  const std::size_t given = cams.size();
+  for (std::size_t c = 0; c < given; ++c) add_measurements(c, true);
+  if (anchors > 0) {
+    const std::size_t local_planes = planes.size();
+    for (std::size_t i = 0; i < local_planes; ++i) {
+      std::vector<std::shared_ptr<KeyFrame>> others;
+      for (const auto& o : planes[i]->observers)
+        if (auto k = o.lock(); k && !k->bad && !in_problem.count(k.get())) others.push_back(k);
+      const std::size_t n = std::min(others.size(), static_cast<std::size_t>(anchors));
+      for (std::size_t a = 0; a < n; ++a) {
+        // Evenly over the plane's history, the oldest and the newest included.
+        const std::size_t at = n == 1 ? others.size() - 1 : a * (others.size() - 1) / (n - 1);
+        const auto& k = others[at];
+        if (in_problem.count(k.get())) continue;
+        in_problem[k.get()] = static_cast<int>(cams.size());
+        cams.push_back(k);
+        pb.cameras.push_back({k->pose(), true});
+        add_measurements(cams.size() - 1, false);
+      }
+    }
+  }
+  // Each plane starts at the inlier-weighted mean of its measurements.
+  std::vector<Eigen::Vector3d> n_sum(planes.size(), Eigen::Vector3d::Zero());
+  std::vector<double> d_sum(planes.size(), 0), w_sum(planes.size(), 0);
+  for (const auto& pm : pb.plane_measurements) {
+    const auto j = static_cast<std::size_t>(pm.plane);
+    const PlaneMeasurement w = plane_in_world(pm.m, pb.cameras[static_cast<std::size_t>(pm.camera)].T_cw);
+    const double wt = static_cast<double>(std::max<std::size_t>(pm.m.inliers, 1));
+    n_sum[j] += wt * w.n_c;
+    d_sum[j] += wt * w.d_c;
+    w_sum[j] += wt;
+  }
+  for (std::size_t j = 0; j < planes.size(); ++j) {
+    const Eigen::Vector3d n = n_sum[j].norm() > 0 ? Eigen::Vector3d(n_sum[j].normalized()) : planes[j]->n_w;
+    pb.planes.push_back({n, w_sum[j] > 0 ? d_sum[j] / w_sum[j] : planes[j]->d_w});
+  }
+  return planes;
+}
+
+}  // namespace builtscene::slam

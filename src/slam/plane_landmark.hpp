@@ -1,0 +1,73 @@
+#pragma once
+// Plane landmarks (optional, `--depth-planes`): the walls, floor and ceiling a keyframe's
+// depth sees (depth_planes.hpp) become map landmarks shared by every keyframe that sees the
+// same plane, and bundle adjustment holds each keyframe to its measured distance and tilt to
+// them. Down a corridor whose walls carry no features, the map points sit on the far end
+// wall, where a turn and a sideways slide look alike (docs/slam.md, "The depth prior"); a
+// wall seen from every keyframe along the straight ties their headings and lateral
+// positions together, so they cannot drift apart one keyframe at a time.
+//
+// Association (local mapping, under the map lock): a keyframe's measured plane, moved into
+// the world with the keyframe's pose, joins the map plane whose normal is within match_deg,
+// whose offset is within match_m and which was last seen from within match_range_m; else it
+// starts a new one. Bundle adjustment refines the planes with the poses (local BA also holds
+// up to `anchors` older observers of each local plane fixed, so the new keyframes are pulled
+// to where the plane has been all along). Not saved with the map: a loaded map starts
+// without planes.
+#include <memory>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "core/se3.hpp"
+#include "slam/depth_planes.hpp"
+
+namespace builtscene::slam {
+
+class KeyFrame;
+class Map;
+struct BundleAdjustmentProblem;
+
+struct PlaneLandmarkOptions {
+  bool enabled = false;
+  double sigma_rad = 0.005;  // a measured plane's normal (0.29 degrees)
+  double sigma_m = 0.01;     // its distance
+  double match_deg = 5;
+  double match_m = 0.08;
+  double match_range_m = 8;
+  int anchors = 8;
+  DepthPlaneOptions extraction;
+};
+
+// A plane n_w.X + d_w = 0 in the world. Guarded by the map lock.
+struct MapPlane {
+  long id = 0;
+  Eigen::Vector3d n_w = Eigen::Vector3d::UnitZ();
+  double d_w = 0;
+  Eigen::Vector3d last_seen_from = Eigen::Vector3d::Zero();  // centre of its newest observer
+  std::vector<std::weak_ptr<KeyFrame>> observers;            // in the order they joined
+};
+
+// One plane a keyframe's depth measured, and the map plane it was associated with.
+struct KeyFramePlane {
+  PlaneMeasurement m;
+  std::shared_ptr<MapPlane> landmark;
+};
+
+// A camera-frame plane moved into the world with the camera's pose T_cw.
+PlaneMeasurement plane_in_world(const PlaneMeasurement& m_c, const SE3& T_cw);
+
+// Associates the keyframe's measured planes (KeyFrame::planes) with the map's, making new
+// map planes where none matches. Requires the map lock.
+void associate_planes(KeyFrame& kf, Map& map, const PlaneLandmarkOptions& opt);
+
+// Adds the plane measurements of the cameras in `cams` (pb.cameras in the same order) to
+// `pb`, each plane started at the inlier-weighted mean of its measurements from those
+// cameras; with anchors > 0 up to that many other observers of each plane are appended to
+// `cams` and `pb.cameras` as fixed cameras. Returns the map planes in pb.planes' order.
+// Requires the map lock.
+std::vector<std::shared_ptr<MapPlane>> add_plane_terms(std::vector<std::shared_ptr<KeyFrame>>& cams,
+                                                       BundleAdjustmentProblem& pb, const PlaneLandmarkOptions& opt,
+                                                       int anchors);
+
+}  // namespace builtscene::slam

@@ -1,0 +1,184 @@
+// TruePlane landmarks against constructed truth: planes found in a ray-cast corridor depth image,
+// bundle adjustment holding cameras to the walls they measure, association across keyframes.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "../common/kinect_camera.hpp"
+#include "core/so3.hpp"
+#include "slam/depth_planes.hpp"
+#include "slam/key_frame.hpp"
+#include "slam/local_bundle_adjuster.hpp"
+#include "slam/map.hpp"
+#include "slam/plane_landmark.hpp"
+#include "synthetic_scene.hpp"
+
+namespace builtscene::slam {
+namespace {
+
+using builtscene::testing::kinect_camera;
+
+struct TruePlane {
+  Eigen::Vector3d n;  // unit; n.X + d = 0
+  double d;
+};
+
+// Camera coordinates (x right, y down, z forward): a corridor 2 m wide and 2.6 m high along z,
+// the camera 1 m above the floor, 0.3 m left of the middle; an end wall 6 m ahead. Each plane
+// oriented towards the camera (d > 0).
+std::vector<TruePlane> corridor_planes() {
+  return {{{0, -1, 0}, 1.0},     // floor y = 1
+          {{0, 1, 0}, 1.6},      // ceiling y = -1.6
+          {{1, 0, 0}, 0.7},      // left wall x = -0.7
+          {{-1, 0, 0}, 1.3},     // right wall x = 1.3
+          {{0, 0, -1}, 6.0}};    // end wall z = 6
+}
+
+cv::Mat ray_cast(const PinholeCamera& cam, const std::vector<TruePlane>& planes, double sigma, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> noise(0.0, sigma);
+  cv::Mat depth(cam.height, cam.width, CV_32F, cv::Scalar(0));
+  for (int v = 0; v < cam.height; ++v)
+    for (int u = 0; u < cam.width; ++u) {
+      const Eigen::Vector3d ray((u - cam.cx) / cam.fx, (v - cam.cy) / cam.fy, 1.0);
+      double s = 1e9;
+      for (const auto& p : planes)
+        if (const double nr = p.n.dot(ray); nr < 0) s = std::min(s, p.d / -nr);  // n.(s ray) + d = 0
+      if (s < 1e8) depth.at<float>(v, u) = static_cast<float>(s + noise(rng));
+    }
+  return depth;
+}
+
+double angle_between_deg(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  return std::acos(std::clamp(a.normalized().dot(b.normalized()), -1.0, 1.0)) * 180 / M_PI;
+}
+
+TEST(DepthPlanes, FindsTheCorridorsFloorWallsAndCeilingUnderNoise) {
+  const PinholeCamera cam = kinect_camera();
+  const auto truth = corridor_planes();
+  const cv::Mat depth = ray_cast(cam, truth, 0.005, 3);
+  const auto found = extract_depth_planes(depth, cam.fx, cam.fy, cam.cx, cam.cy);
+  // The ceiling (1.6 m above: in view only beyond 3.5 m) and the end wall at 6 m lie beyond
+  // max_depth (4 m); the floor and both walls are found, each once.
+  ASSERT_EQ(found.size(), 3u);
+  for (std::size_t t : {0, 2, 3}) {
+    int matches = 0;
+    for (const auto& f : found)
+      if (angle_between_deg(f.n_c, truth[t].n) < 1.0) {
+        ++matches;
+        EXPECT_LT(angle_between_deg(f.n_c, truth[t].n), 0.3) << "plane " << t;
+        EXPECT_NEAR(f.d_c, truth[t].d, 0.005) << "plane " << t;
+        EXPECT_GE(f.inliers, 600u);
+      }
+    EXPECT_EQ(matches, 1) << "plane " << t;
+  }
+}
+
+TEST(DepthPlanes, NoneInAnEmptyOrWrongTypeImage) {
+  const PinholeCamera cam = kinect_camera();
+  EXPECT_TRUE(extract_depth_planes(cv::Mat(), cam.fx, cam.fy, cam.cx, cam.cy).empty());
+  EXPECT_TRUE(extract_depth_planes(cv::Mat(480, 640, CV_16U, cv::Scalar(1000)), cam.fx, cam.fy, cam.cx, cam.cy).empty());
+  EXPECT_TRUE(extract_depth_planes(cv::Mat(480, 640, CV_32F, cv::Scalar(0)), cam.fx, cam.fy, cam.cx, cam.cy).empty());
+}
+
+TEST(PlaneLandmark, WorldPlaneOfACameraPlaneHoldsItsPoints) {
+  const SE3 T_cw(so3_exp(Eigen::Vector3d(0.1, -0.4, 0.2)), Eigen::Vector3d(0.5, -0.2, 1.0));
+  const PlaneMeasurement m_c{Eigen::Vector3d(0.2, -0.9, 0.1).normalized(), 1.2, 1000};
+  const PlaneMeasurement m_w = plane_in_world(m_c, T_cw);
+  // Three points on the plane in camera coordinates, moved to the world.
+  const Eigen::Vector3d a = -m_c.d_c * m_c.n_c;
+  const Eigen::Vector3d e1 = m_c.n_c.unitOrthogonal(), e2 = m_c.n_c.cross(e1);
+  for (const Eigen::Vector3d& pc : {a, Eigen::Vector3d(a + 2 * e1), Eigen::Vector3d(a - e1 + 3 * e2)}) {
+    const Eigen::Vector3d pw = T_cw.inverse() * pc;
+    EXPECT_NEAR(m_w.n_c.dot(pw) + m_w.d_c, 0.0, 1e-12);
+  }
+}
+
+// Cameras 1 m apart down a corridor (world = the first camera), each seeing a handful of
+// points on the end wall 15 m ahead and measuring the two side walls and the floor exactly.
+// The far points leave a turn and a sideways slide alike; the walls do not.
+struct CorridorBa {
+  BundleAdjustmentProblem pb;
+  std::vector<SE3> truth;
+};
+
+CorridorBa corridor_ba(bool with_planes, unsigned seed) {
+  CorridorBa c;
+  auto& pb = c.pb;
+  pb.K = test::kinect();
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(-1, 1);
+  std::normal_distribution<double> pixel(0, 1.0);
+  // World planes (camera 0 = world): left wall x = -0.7, right wall x = 1.3, floor y = 1.
+  const std::vector<TruePlane> walls = {{{1, 0, 0}, 0.7}, {{-1, 0, 0}, 1.3}, {{0, -1, 0}, 1.0}};
+  for (int i = 0; i < 8; ++i) {
+    const double yaw = 0.01 * std::sin(i);  // a little wander
+    c.truth.push_back(SE3(so3_exp(Eigen::Vector3d(0, yaw, 0)), Eigen::Vector3d(0.05 * std::cos(i), 0, -1.0 * i)));
+    pb.cameras.push_back({i < 2 ? c.truth.back() : test::perturb(c.truth.back(), 0.02, 0.1, rng), i < 2});
+  }
+  for (int j = 0; j < 30; ++j) {
+    const Eigen::Vector3d p(u(rng), 0.5 * u(rng), 15.0 + u(rng));
+    pb.points.push_back(p + Eigen::Vector3d(0.1 * u(rng), 0.1 * u(rng), 0.3 * u(rng)));  // start off
+    for (int i = 0; i < 8; ++i) {
+      BundleAdjustmentProblem::Measurement m;
+      m.camera = i;
+      m.point = j;
+      m.o.uv = test::project(pb.K, c.truth[static_cast<std::size_t>(i)] * p) + Eigen::Vector2d(pixel(rng), pixel(rng));
+      m.o.inv_sigma2 = 1.0;
+      pb.measurements.push_back(m);
+    }
+  }
+  if (with_planes) {
+    for (const auto& w : walls) pb.planes.push_back({w.n + Eigen::Vector3d(0.02, 0.02, 0.02), w.d + 0.05});  // start off
+    for (int i = 0; i < 8; ++i)
+      for (std::size_t k = 0; k < walls.size(); ++k) {
+        // The world plane seen from camera i: n_c = R n, d_c = d - n_c.t.
+        const SE3& T = c.truth[static_cast<std::size_t>(i)];
+        PlaneMeasurement m;
+        m.n_c = T.rotation_matrix() * walls[k].n;
+        m.d_c = walls[k].d - m.n_c.dot(T.translation());
+        m.inliers = 1000;
+        pb.plane_measurements.push_back({i, static_cast<int>(k), m});
+      }
+  }
+  return c;
+}
+
+// Across the corridor and in height: what the walls and the floor fix (along it, only the far
+// points' parallax does, and poorly).
+double worst_sideways_error(const CorridorBa& c, const BundleAdjustmentResult& r) {
+  double worst = 0;
+  for (std::size_t i = 0; i < c.truth.size(); ++i) {
+    const Eigen::Vector3d e = r.poses[i].inverse().translation() - c.truth[i].inverse().translation();
+    worst = std::max(worst, e.head<2>().norm());
+  }
+  return worst;
+}
+
+TEST(PlaneLandmark, BundleAdjustmentHoldsCamerasToTheWallsTheyMeasure) {
+  for (unsigned seed = 1; seed <= 3; ++seed) {
+    auto with = corridor_ba(true, seed), without = corridor_ba(false, seed);
+    const auto rw = solve_bundle_adjustment(with.pb, {20, 20});
+    const auto ro = solve_bundle_adjustment(without.pb, {20, 20});
+    ASSERT_TRUE(rw.solved && ro.solved);
+    double worst_rot = 0;
+    for (std::size_t i = 0; i < with.truth.size(); ++i)
+      worst_rot = std::max(worst_rot, test::rotation_error_deg(rw.poses[i], with.truth[i]));
+    // Exact walls and floor: every camera within 1 cm (the terms' sigma) of the truth across the corridor and in
+    // height, and within 0.2 degrees (the plane terms' sigma is 0.29; the far points' pixel
+    // noise pulls against them), the planes within 5 mm and 0.05 degrees.
+    EXPECT_LT(worst_sideways_error(with, rw), 0.01) << "seed " << seed;
+    EXPECT_LT(worst_rot, 0.2) << "seed " << seed;
+    const std::vector<TruePlane> walls = {{{1, 0, 0}, 0.7}, {{-1, 0, 0}, 1.3}, {{0, -1, 0}, 1.0}};
+    for (std::size_t k = 0; k < walls.size(); ++k) {
+      EXPECT_LT(angle_between_deg(rw.planes[k].n, walls[k].n), 0.05) << "seed " << seed << " plane " << k;
+      EXPECT_NEAR(rw.planes[k].d, walls[k].d, 0.005) << "seed " << seed << " plane " << k;
+    }
+    // Without them the far points alone leave the slide: at least 10x the error.
+    EXPECT_GT(worst_sideways_error(without, ro), 10 * worst_sideways_error(with, rw)) << "seed " << seed;
+  }
+}
+
+}  // namespace
+}  // namespace builtscene::slam
