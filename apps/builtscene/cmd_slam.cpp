@@ -20,6 +20,7 @@
 #include "io/tum_dataset.hpp"
 #include "nav/region.hpp"
 #include "ogm/ground_frame.hpp"
+#include "slam/map.hpp"
 #include "slam/system.hpp"
 #include "slam_ogm_output.hpp"
 
@@ -260,6 +261,20 @@ nlohmann::json run_slam(const SlamOptions& opt) {
     j["planar_motion"] = {{"up_c", {up.x(), up.y(), up.z()}},
                           {"from", floor ? "floor" : "pitch"},
                           {"floor_height_m", floor ? nlohmann::json(floor->height_m) : nlohmann::json(nullptr)}};
+  }
+  if (opt.depth_planes) {
+    std::lock_guard lock(system.map().mutex());
+    std::size_t measured = 0, associated = 0, observers = 0;
+    for (const auto& kf : system.map().keyframes()) {
+      measured += kf->planes.size();
+      for (const auto& p : kf->planes) associated += p.landmark != nullptr;
+    }
+    for (const auto& p : system.map().planes()) observers += p->observers.size();
+    j["plane_landmarks"] = {{"planes", system.map().planes().size()},
+                            {"keyframe_planes", measured},
+                            {"associated", associated},
+                            {"observations_per_plane", system.map().planes().empty() ? 0.0
+                                                       : static_cast<double>(observers) / static_cast<double>(system.map().planes().size())}};
   }
   spdlog::info("slam: {} frames, {} tracked, {} lost, {} keyframes, {} map points, {:.1f} fps", n, tracked,
                lost + not_initialized, system.keyframe_count(), system.map_point_count(), j["fps"].get<double>());

@@ -82,6 +82,18 @@ struct PlaneCost {
   }
 };
 
+// A pose block held near its start: (block - start) / sigma, rotation and translation apart.
+struct HoldInPlaceCost {
+  double start[6];
+  double inv_sigma_rad = 50, inv_sigma_m = 20;
+  template <typename T>
+  bool operator()(const T* pose, T* r) const {
+    for (int k = 0; k < 3; ++k) r[k] = (pose[k] - T(start[k])) * T(inv_sigma_rad);
+    for (int k = 3; k < 6; ++k) r[k] = (pose[k] - T(start[k])) * T(inv_sigma_m);
+    return true;
+  }
+};
+
 }  // namespace
 
 BundleAdjustmentResult solve_bundle_adjustment(const BundleAdjustmentProblem& pb, const BundleAdjustmentOptions& options,
@@ -175,6 +187,14 @@ BundleAdjustmentResult solve_bundle_adjustment(const BundleAdjustmentProblem& pb
       camera_used[c] = 1;
       if (!plane_used[j]) problem.SetManifold(&plane_n[3 * j], &unit_normal);
       plane_used[j] = 1;
+    }
+    for (const int held : pb.held_in_place) {
+      const auto c = static_cast<std::size_t>(held);
+      if (c >= nc || pb.cameras[c].fixed) continue;
+      auto* cost = new HoldInPlaceCost{{}, 1.0 / pb.hold_sigma_rad, 1.0 / pb.hold_sigma_m};
+      detail::pose_to_block(pb.cameras[c].T_cw, cost->start);
+      problem.AddResidualBlock(new ceres::AutoDiffCostFunction<HoldInPlaceCost, 6, 6>(cost), nullptr, &poses[6 * c]);
+      camera_used[c] = 1;
     }
     if (pb.planar.enabled)
       for (std::size_t c = 0; c < nc; ++c)

@@ -56,6 +56,11 @@ struct BundleAdjustmentProblem {
   std::vector<Plane> planes;
   std::vector<PlaneObservation> plane_measurements;
   double plane_sigma_rad = 0.005, plane_sigma_m = 0.01;
+  // Cameras held near their starting pose (standard deviations hold_sigma_m on the centre's
+  // block translation, hold_sigma_rad on the rotation): where nothing else fixes a direction
+  // the plane terms leave free.
+  std::vector<int> held_in_place;
+  double hold_sigma_m = 0.05, hold_sigma_rad = 0.02;
 };
 
 struct BundleAdjustmentOptions {

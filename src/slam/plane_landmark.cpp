@@ -56,6 +56,17 @@ std::vector<std::shared_ptr<MapPlane>> add_plane_terms(std::vector<std::shared_p
                                                        int anchors) {
   std::vector<std::shared_ptr<MapPlane>> planes;
   if (!opt.enabled) return planes;
+  // Planes leave the motion along them free: a keyframe whose points no fixed camera sees (made
+  // on the depth-odometry bridge, sharing none with the map) would slide along the walls with
+  // its points to wherever the planes' small disagreements pull it. Such cameras are held near
+  // where tracking put them, loosely (BundleAdjustmentProblem::held_in_place), so the planes
+  // still set their tilt, height and distance to the walls.
+  const bool held = std::any_of(pb.measurements.begin(), pb.measurements.end(), [&](const auto& m) {
+    return pb.cameras[static_cast<std::size_t>(m.camera)].fixed;
+  });
+  if (!held)
+    for (std::size_t c = 0; c < pb.cameras.size(); ++c)
+      if (!pb.cameras[c].fixed) pb.held_in_place.push_back(static_cast<int>(c));
   pb.plane_sigma_rad = opt.sigma_rad;
   pb.plane_sigma_m = opt.sigma_m;
   std::unordered_map<const MapPlane*, int> index;

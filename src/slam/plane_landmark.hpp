@@ -64,7 +64,9 @@ void associate_planes(KeyFrame& kf, Map& map, const PlaneLandmarkOptions& opt);
 // Adds the plane measurements of the cameras in `cams` (pb.cameras in the same order) to
 // `pb`, each plane started at the inlier-weighted mean of its measurements from those
 // cameras; with anchors > 0 up to that many other observers of each plane are appended to
-// `cams` and `pb.cameras` as fixed cameras. Returns the map planes in pb.planes' order.
+// `cams` and `pb.cameras` as fixed cameras. When no fixed camera measures a point, the free
+// cameras are also held loosely in place (the planes alone would leave them sliding along
+// the walls). Returns the map planes in pb.planes' order.
 // Requires the map lock.
 std::vector<std::shared_ptr<MapPlane>> add_plane_terms(std::vector<std::shared_ptr<KeyFrame>>& cams,
                                                        BundleAdjustmentProblem& pb, const PlaneLandmarkOptions& opt,

@@ -12,6 +12,7 @@
 #include "slam/local_bundle_adjuster.hpp"
 #include "slam/map.hpp"
 #include "slam/plane_landmark.hpp"
+#include "map_test_fixture.hpp"
 #include "synthetic_scene.hpp"
 
 namespace builtscene::slam {
@@ -178,6 +179,85 @@ TEST(PlaneLandmark, BundleAdjustmentHoldsCamerasToTheWallsTheyMeasure) {
     // Without them the far points alone leave the slide: at least 10x the error.
     EXPECT_GT(worst_sideways_error(without, ro), 10 * worst_sideways_error(with, rw)) << "seed " << seed;
   }
+}
+
+// A keyframe (no features) at camera centre c looking along world +z, measuring the given
+// world planes as its depth would.
+std::shared_ptr<KeyFrame> keyframe_seeing(Map& map, const Eigen::Vector3d& c, const std::vector<TruePlane>& world) {
+  auto f = std::make_shared<FrameFeatures>();
+  f->ctx = test::kinect_context();
+  build_feature_grid(*f);
+  Frame frame(map.peek_next_keyframe_id(), 1.0, f);
+  const SE3 T_cw(Eigen::Quaterniond::Identity(), -c);
+  frame.set_pose(T_cw);
+  auto kf = std::make_shared<KeyFrame>(map.next_keyframe_id(), frame);
+  for (const auto& w : world) {
+    PlaneMeasurement m;
+    m.n_c = w.n;                     // no rotation
+    m.d_c = w.d + w.n.dot(c);        // d_c = d_w - n_c.t with t = -c
+    m.inliers = 1000;
+    kf->planes.push_back({m, nullptr});
+  }
+  map.add_keyframe(kf);
+  return kf;
+}
+
+TEST(PlaneLandmark, AssociationJoinsOneWallAcrossKeyframesAndKeepsOthersApart) {
+  Map map;
+  std::lock_guard lock(map.mutex());
+  PlaneLandmarkOptions opt;
+  opt.enabled = true;
+  const TruePlane left{{1, 0, 0}, 0.7}, right{{-1, 0, 0}, 1.3}, floor{{0, -1, 0}, 1.0};
+  const TruePlane cabinet{{1, 0, 0}, 0.6};        // 10 cm in front of the left wall: not the wall
+  auto a = keyframe_seeing(map, {0, 0, 0}, {left, right, floor});
+  auto b = keyframe_seeing(map, {0.02, 0.01, 2.0}, {left, floor, cabinet});
+  auto far = keyframe_seeing(map, {0, 0, 20.0}, {left});  // the same plane, but 18 m from its last sighting
+  associate_planes(*a, map, opt);
+  associate_planes(*b, map, opt);
+  associate_planes(*far, map, opt);
+  ASSERT_EQ(map.planes().size(), 5u);  // left, right, floor, cabinet, left again far away
+  EXPECT_EQ(b->planes[0].landmark, a->planes[0].landmark);  // left wall
+  EXPECT_EQ(b->planes[1].landmark, a->planes[2].landmark);  // floor
+  EXPECT_NE(b->planes[2].landmark, a->planes[0].landmark);  // the cabinet is its own plane
+  EXPECT_NE(far->planes[0].landmark, a->planes[0].landmark);
+  // The world planes are the truth (the measurements are exact).
+  const auto& wall = *a->planes[0].landmark;
+  EXPECT_LT(angle_between_deg(wall.n_w, left.n), 1e-9);
+  EXPECT_NEAR(wall.d_w, left.d, 1e-12);
+  EXPECT_EQ(wall.observers.size(), 2u);
+}
+
+TEST(PlaneLandmark, BundleAdjustmentTermsComeWithAnchorsAndHoldLoneCamerasInPlace) {
+  Map map;
+  std::lock_guard lock(map.mutex());
+  PlaneLandmarkOptions opt;
+  opt.enabled = true;
+  const TruePlane left{{1, 0, 0}, 0.7};
+  std::vector<std::shared_ptr<KeyFrame>> kfs;
+  for (int i = 0; i < 12; ++i) {
+    kfs.push_back(keyframe_seeing(map, {0, 0, 0.5 * i}, {left}));
+    associate_planes(*kfs.back(), map, opt);
+  }
+  // A local problem of the newest keyframe alone, with no point seen by a fixed camera: the
+  // wall comes with opt.anchors older observers (fixed), and the keyframe is held in place.
+  BundleAdjustmentProblem pb;
+  std::vector<std::shared_ptr<KeyFrame>> cams = {kfs.back()};
+  pb.cameras.push_back({kfs.back()->pose(), false});
+  const auto planes = add_plane_terms(cams, pb, opt, opt.anchors);
+  ASSERT_EQ(planes.size(), 1u);
+  EXPECT_EQ(cams.size(), 1u + static_cast<std::size_t>(opt.anchors));
+  EXPECT_EQ(pb.plane_measurements.size(), cams.size());
+  EXPECT_EQ(cams[1], kfs.front());  // the oldest observer is one of the anchors
+  for (std::size_t c = 1; c < cams.size(); ++c) EXPECT_TRUE(pb.cameras[c].fixed);
+  ASSERT_EQ(pb.held_in_place.size(), 1u);
+  EXPECT_EQ(pb.held_in_place[0], 0);
+  EXPECT_NEAR(pb.planes[0].d, left.d, 1e-12);
+  // Off: nothing added.
+  BundleAdjustmentProblem off;
+  std::vector<std::shared_ptr<KeyFrame>> cams_off = {kfs.back()};
+  off.cameras.push_back({kfs.back()->pose(), false});
+  EXPECT_TRUE(add_plane_terms(cams_off, off, PlaneLandmarkOptions{}, 8).empty());
+  EXPECT_TRUE(off.plane_measurements.empty());
 }
 
 }  // namespace

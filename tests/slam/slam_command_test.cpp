@@ -131,6 +131,8 @@ TEST_F(SlamCommand, BadPriorAndLinkValuesAreUsageErrorsNamingTheFlag) {
   for (const auto& [args, flag] : {std::pair{" --motion-prior -1", "--motion-prior"},
                                    std::pair{" --motion-prior 1 --motion-prior-deg nan", "--motion-prior-deg"},
                                    std::pair{" --depth-links --depth-link-weight 0", "--depth-link-weight"},
+                                   std::pair{" --depth-planes --depth-plane-weight 0", "--depth-plane-weight"},
+                                   std::pair{" --depth-planes --depth-plane-weight nan", "--depth-plane-weight"},
                                    std::pair{" --depth-prior -0.5", "--depth-prior"},
                                    std::pair{" --depth-prior nan", "--depth-prior"},
                                    std::pair{" --depth-prior-below -3", "--depth-prior-below"},
