@@ -177,17 +177,6 @@ BundleAdjustmentResult solve_bundle_adjustment(const BundleAdjustmentProblem& pb
                                nullptr, &poses[6 * i], &poses[6 * j]);
       camera_used[i] = camera_used[j] = 1;
     }
-    std::vector<char> plane_used(nplanes, 0);
-    for (const auto& pm : pb.plane_measurements) {
-      const auto c = static_cast<std::size_t>(pm.camera), j = static_cast<std::size_t>(pm.plane);
-      if (c >= nc || j >= nplanes) continue;
-      problem.AddResidualBlock(new ceres::AutoDiffCostFunction<PlaneCost, 4, 6, 3, 1>(new PlaneCost{
-                                   pm.m.n_c, pm.m.d_c, 1.0 / pb.plane_sigma_rad, 1.0 / pb.plane_sigma_m}),
-                               &huber_plane, &poses[6 * c], &plane_n[3 * j], &plane_d[j]);
-      camera_used[c] = 1;
-      if (!plane_used[j]) problem.SetManifold(&plane_n[3 * j], &unit_normal);
-      plane_used[j] = 1;
-    }
     for (const int held : pb.held_in_place) {
       const auto c = static_cast<std::size_t>(held);
       if (c >= nc || pb.cameras[c].fixed) continue;
@@ -195,6 +184,19 @@ BundleAdjustmentResult solve_bundle_adjustment(const BundleAdjustmentProblem& pb
       detail::pose_to_block(pb.cameras[c].T_cw, cost->start);
       problem.AddResidualBlock(new ceres::AutoDiffCostFunction<HoldInPlaceCost, 6, 6>(cost), nullptr, &poses[6 * c]);
       camera_used[c] = 1;
+    }
+    // A free camera that nothing else holds (its points all rejected) gets no plane term: the
+    // planes alone leave it free to slide along them (a singular system).
+    std::vector<char> plane_used(nplanes, 0);
+    for (const auto& pm : pb.plane_measurements) {
+      const auto c = static_cast<std::size_t>(pm.camera), j = static_cast<std::size_t>(pm.plane);
+      if (c >= nc || j >= nplanes || (!camera_used[c] && !pb.cameras[c].fixed)) continue;
+      problem.AddResidualBlock(new ceres::AutoDiffCostFunction<PlaneCost, 4, 6, 3, 1>(new PlaneCost{
+                                   pm.m.n_c, pm.m.d_c, 1.0 / pb.plane_sigma_rad, 1.0 / pb.plane_sigma_m}),
+                               &huber_plane, &poses[6 * c], &plane_n[3 * j], &plane_d[j]);
+      camera_used[c] = 1;  // (fixed anchors: set constant below)
+      if (!plane_used[j]) problem.SetManifold(&plane_n[3 * j], &unit_normal);
+      plane_used[j] = 1;
     }
     if (pb.planar.enabled)
       for (std::size_t c = 0; c < nc; ++c)
