@@ -4,7 +4,9 @@
 # another seed in localization mode logging every tag measurement, then `eval markers` against
 # the survey (Tables 2.1 and 2.2 of the source: per-marker position RMSE, consecutive distances).
 #   bench/markers_corridor.sh [WORKDIR]     (default /tmp/builtscene-markers-corridor)
-# Environment: LOOPS (5), NOISE (kinect | none), MAP_SEED (1), RUN_SEED (2).
+# Environment: LOOPS (5), NOISE (kinect | none), MAP_SEED (1), RUN_SEED (2), MAP_LOOPS (loops of
+# the map run, 1), SLAM_EXTRA (more `slam` arguments for the map run, e.g. "--sync-mapping
+# --depth-planes").
 # Output: WORKDIR/eval/markers.md, .csv tables, markers.png; bench-out/markers_corridor.json
 # (slam, localize and eval summaries) and a line per stage on stderr.
 set -euo pipefail
@@ -15,16 +17,20 @@ LOOPS=${LOOPS:-5}
 NOISE=${NOISE:-kinect}
 MAP_SEED=${MAP_SEED:-1}
 RUN_SEED=${RUN_SEED:-2}
+MAP_LOOPS=${MAP_LOOPS:-1}
+SLAM_EXTRA=${SLAM_EXTRA:-}
 mkdir -p "$WORK" bench-out
 map_run="$WORK/map-$NOISE-$MAP_SEED"
+[ "$MAP_LOOPS" = 1 ] || map_run="$map_run-$MAP_LOOPS"
 loc_run="$WORK/loc-$NOISE-$RUN_SEED-$LOOPS"
-[ -f "$map_run/rgb.txt" ] || "$BIN" -q synth rgbd --scene corridor-loop --motion robot --loops 1 \
+[ -f "$map_run/rgb.txt" ] || "$BIN" -q synth rgbd --scene corridor-loop --motion robot --loops "$MAP_LOOPS" \
   --noise "$NOISE" --seed "$MAP_SEED" --out "$map_run"
 [ -f "$loc_run/rgb.txt" ] || "$BIN" -q synth rgbd --scene corridor-loop --motion robot --loops "$LOOPS" \
   --noise "$NOISE" --seed "$RUN_SEED" --out "$loc_run"
-echo "markers_corridor: SLAM on one loop ($(wc -l < "$map_run/groundtruth.txt") poses)" >&2
+echo "markers_corridor: SLAM on $MAP_LOOPS loop(s) ($(wc -l < "$map_run/groundtruth.txt") poses)" >&2
+# shellcheck disable=SC2086
 "$BIN" -q slam --dataset "$map_run" --trajectory "$WORK/map_traj.txt" --map-out "$WORK/corridor.bsmap" \
-  --ogm-out "$WORK/grid" --json > "$WORK/slam.json"
+  --ogm-out "$WORK/grid" $SLAM_EXTRA --json > "$WORK/slam.json"
 "$BIN" -q eval ate --gt "$map_run/groundtruth.txt" --est "$WORK/map_traj.txt" --json > "$WORK/slam_ate.json" || true
 echo "markers_corridor: localization over $LOOPS loops" >&2
 "$BIN" -q localize --dataset "$loc_run" --map "$WORK/corridor.bsmap" --trajectory "$WORK/loc_traj.txt" \
