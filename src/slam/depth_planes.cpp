@@ -7,6 +7,20 @@
 
 namespace builtscene::slam {
 
+void fit_plane_least_squares(const std::vector<Eigen::Vector3d>& points, const Eigen::Vector3d& orient_like,
+                             Eigen::Vector3d& n, double& d) {
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (const auto& p : points) mean += p;
+  mean /= static_cast<double>(points.size());
+  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+  for (const auto& p : points) cov += (p - mean) * (p - mean).transpose();
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(cov);
+  Eigen::Vector3d m = es.eigenvectors().col(0).normalized();
+  if (m.dot(orient_like) < 0) m = -m;  // (orient_like may be n itself)
+  n = m;
+  d = -n.dot(mean);
+}
+
 std::vector<PlaneMeasurement> extract_depth_planes(const cv::Mat& depth_m, double fx, double fy, double cx, double cy,
                                                    const DepthPlaneOptions& opt) {
   std::vector<PlaneMeasurement> out;
@@ -63,20 +77,12 @@ std::vector<PlaneMeasurement> extract_depth_planes(const cv::Mat& depth_m, doubl
     double d = best_d;
     std::size_t count = 0;
     for (int pass = 0; pass < 2; ++pass) {
-      Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-      count = 0;
+      std::vector<Eigen::Vector3d> inliers;
       for (const std::size_t i : free)
-        if (is_inlier(i, n, d)) mean += pts[i], ++count;
+        if (is_inlier(i, n, d)) inliers.push_back(pts[i]);
+      count = inliers.size();
       if (count < 3) break;
-      mean /= static_cast<double>(count);
-      Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
-      for (const std::size_t i : free)
-        if (is_inlier(i, n, d)) cov += (pts[i] - mean) * (pts[i] - mean).transpose();
-      const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(cov);
-      Eigen::Vector3d m = es.eigenvectors().col(0).normalized();
-      if (m.dot(n) < 0) m = -m;
-      n = m;
-      d = -n.dot(mean);
+      fit_plane_least_squares(inliers, n, n, d);
     }
     if (count < opt.min_inliers) break;
     for (const std::size_t i : free)

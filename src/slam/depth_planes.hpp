@@ -29,6 +29,11 @@ struct DepthPlaneOptions {
   int iterations = 200;           // RANSAC hypotheses per plane
 };
 
+// The least-squares plane through `points` (3 or more): n (unit, turned towards `orient_like`)
+// and d with n.X + d = 0 for the points' mean. Shared with the floor fit (floor_plane.hpp).
+void fit_plane_least_squares(const std::vector<Eigen::Vector3d>& points, const Eigen::Vector3d& orient_like,
+                             Eigen::Vector3d& n, double& d);
+
 // Sequential RANSAC over the strided depth points (metres, CV_32F, 0 = none; undistorted
 // pinhole fx, fy, cx, cy): the plane with most inliers, refit by least squares, its inliers
 // removed, and again, up to max_planes; largest first. Deterministic.

@@ -4,7 +4,7 @@
 #include <random>
 #include <vector>
 
-#include <Eigen/Eigenvalues>
+#include "slam/depth_planes.hpp"
 
 namespace builtscene::slam {
 
@@ -60,20 +60,12 @@ std::optional<FloorPlane> estimate_floor_plane(const cv::Mat& depth_m, const Pin
   double d = best_d;
   std::size_t count = 0;
   for (int pass = 0; pass < 2; ++pass) {
-    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-    count = 0;
+    std::vector<Eigen::Vector3d> inliers;
     for (const auto& p : pts)
-      if (std::abs(n.dot(p) + d) < opt.inlier_m) mean += p, ++count;
+      if (std::abs(n.dot(p) + d) < opt.inlier_m) inliers.push_back(p);
+    count = inliers.size();
     if (count < opt.min_inliers) return std::nullopt;
-    mean /= static_cast<double>(count);
-    Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
-    for (const auto& p : pts)
-      if (std::abs(n.dot(p) + d) < opt.inlier_m) cov += (p - mean) * (p - mean).transpose();
-    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(cov);
-    Eigen::Vector3d m = es.eigenvectors().col(0).normalized();
-    if (m.dot(guess) < 0) m = -m;
-    n = m;
-    d = -n.dot(mean);
+    fit_plane_least_squares(inliers, guess, n, d);
   }
   if (d < opt.min_height_m || n.dot(guess) < cos_max) return std::nullopt;
   return FloorPlane{n, d, count};
