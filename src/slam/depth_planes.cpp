@@ -48,8 +48,9 @@ std::vector<PlaneMeasurement> extract_depth_planes(const cv::Mat& depth_m, doubl
     }
   const double cos_dev = std::cos(opt.max_normal_dev_deg * M_PI / 180.0);
   std::vector<char> used(pts.size(), 0);
+  // (Only ever asked of points not yet taken by an earlier plane.)
   auto is_inlier = [&](std::size_t i, const Eigen::Vector3d& n, double d) {
-    return !used[i] && std::abs(n.dot(pts[i]) + d) < opt.inlier_m && std::abs(n.dot(normals[i])) >= cos_dev;
+    return std::abs(n.dot(pts[i]) + d) < opt.inlier_m && std::abs(n.dot(normals[i])) >= cos_dev;
   };
   std::mt19937 rng(12345);
   for (int plane = 0; plane < opt.max_planes; ++plane) {

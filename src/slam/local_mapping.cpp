@@ -476,10 +476,7 @@ void LocalMapping::local_bundle_adjustment(KeyFrame& kf) {
     pts[i]->position = r.points[i];
     pts[i]->update_normal_and_depth();
   }
-  for (std::size_t j = 0; j < planes.size(); ++j) {
-    planes[j]->n_w = r.planes[j].n;
-    planes[j]->d_w = r.planes[j].d;
-  }
+  store_solved_planes(planes, r.planes);
 }
 
 void LocalMapping::cull_keyframes(KeyFrame& kf) {

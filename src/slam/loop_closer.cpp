@@ -566,10 +566,7 @@ void LoopCloser::run_global_ba(long loop, long keyframe, long matched) {
         p->position = p->reference->pose_inverse() * (before[p->reference] * p->position);
       p->update_normal_and_depth();
     }
-    for (std::size_t j = 0; j < planes.size(); ++j) {
-      planes[j]->n_w = r.planes[j].n;
-      planes[j]->d_w = r.planes[j].d;
-    }
+    store_solved_planes(planes, r.planes);
     event.stage = LoopEvent::Stage::kGlobalBundleAdjustment;
     event.loop = loop;
     event.keyframe = keyframe;

@@ -123,4 +123,12 @@ std::vector<std::shared_ptr<MapPlane>> add_plane_terms(std::vector<std::shared_p
   return planes;
 }
 
+void store_solved_planes(const std::vector<std::shared_ptr<MapPlane>>& planes,
+                         const std::vector<BundleAdjustmentProblem::Plane>& solved) {
+  for (std::size_t j = 0; j < planes.size() && j < solved.size(); ++j) {
+    planes[j]->n_w = solved[j].n;
+    planes[j]->d_w = solved[j].d;
+  }
+}
+
 }  // namespace builtscene::slam

@@ -21,12 +21,12 @@
 
 #include "core/se3.hpp"
 #include "slam/depth_planes.hpp"
+#include "slam/local_bundle_adjuster.hpp"
 
 namespace builtscene::slam {
 
 class KeyFrame;
 class Map;
-struct BundleAdjustmentProblem;
 
 struct PlaneLandmarkOptions {
   bool enabled = false;
@@ -71,5 +71,10 @@ void associate_planes(KeyFrame& kf, Map& map, const PlaneLandmarkOptions& opt);
 std::vector<std::shared_ptr<MapPlane>> add_plane_terms(std::vector<std::shared_ptr<KeyFrame>>& cams,
                                                        BundleAdjustmentProblem& pb, const PlaneLandmarkOptions& opt,
                                                        int anchors);
+
+// Writes bundle adjustment's solved planes (in add_plane_terms' order) back to the map planes.
+// Requires the map lock.
+void store_solved_planes(const std::vector<std::shared_ptr<MapPlane>>& planes,
+                         const std::vector<BundleAdjustmentProblem::Plane>& solved);
 
 }  // namespace builtscene::slam
