@@ -161,6 +161,9 @@ TrackingOutcome Tracker::track(Frame frame) {
         has_feature_velocity_ = false;
       }
       last_by_depth_ = by_depth;
+      if (!has_velocity_) recent_poses_.clear();
+      recent_poses_.push_back(current_.T_cw);
+      if (recent_poses_.size() > kTurnWindow + 1) recent_poses_.pop_front();
       // Temporary (visual-odometry) matches do not count towards the map.
       for (auto& p : current_.points)
         if (p && p->observation_count() == 0) p = nullptr;
@@ -198,7 +201,16 @@ TrackingOutcome Tracker::track(Frame frame) {
   return out;
 }
 
-void Tracker::forget_motion() { has_velocity_ = has_feature_velocity_ = last_by_depth_ = false; }
+void Tracker::forget_motion() {
+  has_velocity_ = has_feature_velocity_ = last_by_depth_ = false;
+  recent_poses_.clear();
+}
+
+std::optional<double> Tracker::recent_turn_rate() const {
+  if (recent_poses_.size() < kTurnWindow + 1) return std::nullopt;
+  const SE3 d = recent_poses_.back() * recent_poses_.front().inverse();
+  return so3_log(d.rotation()).norm() / static_cast<double>(recent_poses_.size() - 1);
+}
 
 SE3 Tracker::odometry_prediction() const {
   if (!has_velocity_) return SE3();
@@ -210,9 +222,16 @@ SE3 Tracker::odometry_prediction() const {
   // (2.3 m short).
   // Only while driving straight: into a turn a robot slows down (the generated office turns in
   // front of plain walls on the bridge, and holding the speed there cost it 4.8 -> 52 cm).
+  // Straight is judged on the net turn over the last kTurnWindow frames: a bridge frame's own
+  // rotation jitters by 0.1-0.3 degrees on a straight (ICP noise), and judged frame by frame
+  // the hold dropped out on every third frame there, each time feeding the last frame's speed
+  // back (the random walk above, 20 % slow over 110 frames of the generated corridor's start).
   constexpr double kStraight = 0.2 * M_PI / 180.0;  // rad per frame
-  const bool hold = last_by_depth_ && has_feature_velocity_ && so3_log(velocity_.rotation()).norm() < kStraight &&
-                    so3_log(feature_velocity_.rotation()).norm() < kStraight;
+  const auto turn = recent_turn_rate();
+  const bool straight = turn ? *turn < kStraight
+                             : so3_log(velocity_.rotation()).norm() < kStraight &&
+                                   so3_log(feature_velocity_.rotation()).norm() < kStraight;
+  const bool hold = last_by_depth_ && has_feature_velocity_ && straight;
   const SE3& v = hold ? feature_velocity_ : velocity_;
   if (recent_speeds_.size() < 5) return v;
   // Its speed is the median of the last 30 feature-tracked frames: held at it on the bridge,

@@ -186,6 +186,11 @@ class Tracker {
   bool has_feature_velocity_ = false;
   bool last_by_depth_ = false;  // the last frame was carried by the depth odometry
   std::deque<double> recent_speeds_;  // metres per frame of the last frames tracked by features
+  std::deque<SE3> recent_poses_;      // T_cw of the last kTurnWindow + 1 tracked frames, newest last
+  static constexpr std::size_t kTurnWindow = 10;
+  // Mean rotation per frame (rad) between the oldest and the newest of recent_poses_: a turn,
+  // not the frame-to-frame jitter of a bridge (nothing when fewer than kTurnWindow frames).
+  std::optional<double> recent_turn_rate() const;
   SE3 odometry_prediction() const;
   // No motion to extrapolate (start, loss, new map): the velocities and the bridge flag.
   void forget_motion();

@@ -32,7 +32,12 @@ struct Result {
   double rmse = 0, max = 0;
   long tracked = 0;
   std::optional<FloorPlane> floor;
+  // Straight-line distance covered between the first associated frame and frame `chord_end`,
+  // estimated over true (alignment-free: a scale error along the corridor shows here).
+  double chord_ratio = 0;
 };
+
+constexpr std::size_t chord_end = 200;
 
 Result run(const TumDataset& data, const SystemOptions& options) {
   System system(data.settings(), options);
@@ -44,16 +49,24 @@ Result run(const TumDataset& data, const SystemOptions& options) {
   const auto ate = absolute_trajectory_error(data.groundtruth(), system.trajectory(), Alignment::kSE3);
   r.rmse = ate.stats.rmse;
   r.max = ate.stats.max;
+  const auto est = system.trajectory();
+  const auto& gt = data.groundtruth();
+  if (ate.pairs.size() > chord_end) {
+    const auto [g0, e0] = ate.pairs.front();
+    const auto [g1, e1] = ate.pairs[chord_end];
+    const double true_m = (gt[g1].pose.translation() - gt[g0].pose.translation()).norm();
+    r.chord_ratio = (est[e1].pose.translation() - est[e0].pose.translation()).norm() / true_m;
+  }
   r.floor = system.floor_plane();
   return r;
 }
 
 // The first 600 frames of the generated corridor world `seed` (robot), in a fresh folder.
-fs::path generate_corridor_start(int seed, const std::string& name) {
+fs::path generate_corridor_start(int seed, const std::string& name, int frames = 600) {
   const fs::path dir = fs::temp_directory_path() / (name + "_" + std::to_string(::getpid()));
   fs::remove_all(dir);
   const auto r = testing::run_cli("synth rgbd --scene corridor-loop --motion robot --seed " + std::to_string(seed) +
-                                  " --frames 600 --out " + (dir / "seq").string());
+                                  " --frames " + std::to_string(frames) + " --out " + (dir / "seq").string());
   EXPECT_EQ(r.exit_code, 0) << r.err;
   return dir;
 }
@@ -75,7 +88,8 @@ TEST(CorridorStart, PlainStartHoldsWithAndWithoutPlanarMotion) {
               plain.tracked, 100 * plain.rmse, 100 * plain.max, planar.tracked, 100 * planar.rmse, 100 * planar.max);
   EXPECT_EQ(plain.tracked, 600);
   EXPECT_EQ(planar.tracked, 600);
-  // Measured 8.3 / 6.3 cm; the start 2 m off gave 0.8 m RMSE.
+  // Measured 8.3 / 6.3 cm (8.3 / 8.7 cm since the turn window, 2026-12-05); the start 2 m off
+  // gave 0.8 m RMSE.
   EXPECT_LT(plain.rmse, 0.15);
   EXPECT_LT(planar.rmse, 0.15);
   EXPECT_LT(planar.max, 0.40);
@@ -98,7 +112,8 @@ TEST(CorridorStart, PlainStartHoldsWithAndWithoutPlanarMotion) {
 // the first feature frame's 16 cm snap back to the map was then taken for a velocity and
 // held: the start ended 1.9 m off (0.92 m RMSE over 600 frames). The prediction on the bridge
 // is now, while driving straight, the last feature-tracked velocity at the median
-// feature-tracked speed (measured: 0.42 m RMSE, max 0.88 m; tracking.cpp, odometry_prediction).
+// feature-tracked speed (measured: 0.42 m RMSE, max 0.88 m; with straight judged over 10
+// frames, 0.34 m and 0.74 m; tracking.cpp, odometry_prediction).
 TEST(CorridorStart, DepthOdometryBridgeKeepsTheSpeedAlongAPlainCorridor) {
   const fs::path dir = generate_corridor_start(2, "bs_corridor_bridge");
   const auto data = TumDataset::open(dir / "seq");
@@ -108,6 +123,25 @@ TEST(CorridorStart, DepthOdometryBridgeKeepsTheSpeedAlongAPlainCorridor) {
   EXPECT_EQ(result.tracked, 600);
   EXPECT_LT(result.rmse, 0.6);
   EXPECT_LT(result.max, 1.2);
+  fs::remove_all(dir);
+}
+
+// The fourth generated corridor: features give out from frame ~20 to ~180 as well (5 of 500
+// keypoints with depth), and the bridge's prediction holds the feature-tracked speed only while
+// driving straight. Straight was judged on the last frame's rotation alone; a bridge frame
+// jitters by 0.1-0.3 degrees (ICP noise), the hold dropped out every few frames and fed the
+// bridge's own speed back: frames 80-200 covered 0.84 of the true distance (frames 0-200:
+// 0.90), the 400 frames 19.3 cm RMSE. Judged on the net turn over 10 frames (tracking.cpp,
+// recent_turn_rate): 0.97 and 9.9 cm.
+TEST(CorridorStart, BridgeHoldsTheSpeedThroughRotationJitter) {
+  const fs::path dir = generate_corridor_start(4, "bs_corridor_jitter", 400);
+  const auto data = TumDataset::open(dir / "seq");
+  const Result result = run(data, deterministic_options());
+  std::printf("corridor seed 4, 400 frames: %ld tracked, ATE %.2f cm (max %.2f), distance to frame %zu: %.3f of the truth\n",
+              result.tracked, 100 * result.rmse, 100 * result.max, chord_end, result.chord_ratio);
+  EXPECT_EQ(result.tracked, 400);
+  EXPECT_GT(result.chord_ratio, 0.93);
+  EXPECT_LT(result.rmse, 0.14);
   fs::remove_all(dir);
 }
 
