@@ -61,7 +61,7 @@ Result run(const TumDataset& data, const SystemOptions& options) {
   return r;
 }
 
-// The first 600 frames of the generated corridor world `seed` (robot), in a fresh folder.
+// The first `frames` frames of the generated corridor world `seed` (robot), in a fresh folder.
 fs::path generate_corridor_start(int seed, const std::string& name, int frames = 600) {
   const fs::path dir = fs::temp_directory_path() / (name + "_" + std::to_string(::getpid()));
   fs::remove_all(dir);
