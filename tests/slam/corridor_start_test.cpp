@@ -88,8 +88,8 @@ TEST(CorridorStart, PlainStartHoldsWithAndWithoutPlanarMotion) {
               plain.tracked, 100 * plain.rmse, 100 * plain.max, planar.tracked, 100 * planar.rmse, 100 * planar.max);
   EXPECT_EQ(plain.tracked, 600);
   EXPECT_EQ(planar.tracked, 600);
-  // Measured 8.3 / 6.3 cm (8.3 / 8.7 cm since the turn window, 2026-12-05); the start 2 m off
-  // gave 0.8 m RMSE.
+  // Measured 8.3 / 6.3 cm (the same with the bridge's turn window, 2026-12-05); the start 2 m
+  // off gave 0.8 m RMSE.
   EXPECT_LT(plain.rmse, 0.15);
   EXPECT_LT(planar.rmse, 0.15);
   EXPECT_LT(planar.max, 0.40);
