@@ -158,10 +158,10 @@ TrackingOutcome Tracker::track(Frame frame) {
       }
       if (!has_velocity_) {
         recent_speeds_.clear();
+        recent_poses_.clear();
         has_feature_velocity_ = false;
       }
       last_by_depth_ = by_depth;
-      if (!has_velocity_) recent_poses_.clear();
       recent_poses_.push_back(current_.T_cw);
       if (recent_poses_.size() > kTurnWindow + 1) recent_poses_.pop_front();
       // Temporary (visual-odometry) matches do not count towards the map.

@@ -189,7 +189,7 @@ class Tracker {
   std::deque<SE3> recent_poses_;      // T_cw of the last kTurnWindow + 1 tracked frames, newest last
   static constexpr std::size_t kTurnWindow = 10;
   // Mean rotation per frame (rad) between the oldest and the newest of recent_poses_: a turn,
-  // not the frame-to-frame jitter of a bridge (nothing when fewer than kTurnWindow frames).
+  // not the frame-to-frame jitter of a bridge (nothing before kTurnWindow + 1 poses).
   std::optional<double> recent_turn_rate() const;
   SE3 odometry_prediction() const;
   // No motion to extrapolate (start, loss, new map): the velocities and the bridge flag.

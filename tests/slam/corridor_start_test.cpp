@@ -46,11 +46,11 @@ Result run(const TumDataset& data, const SystemOptions& options) {
     r.tracked += system.track_rgbd(data.load_rgb(i), data.load_depth(i), data.entry(i).timestamp).state ==
                  TrackingState::kOk;
   system.shutdown();
-  const auto ate = absolute_trajectory_error(data.groundtruth(), system.trajectory(), Alignment::kSE3);
-  r.rmse = ate.stats.rmse;
-  r.max = ate.stats.max;
   const auto est = system.trajectory();
   const auto& gt = data.groundtruth();
+  const auto ate = absolute_trajectory_error(gt, est, Alignment::kSE3);
+  r.rmse = ate.stats.rmse;
+  r.max = ate.stats.max;
   if (ate.pairs.size() > chord_end) {
     const auto [g0, e0] = ate.pairs.front();
     const auto [g1, e1] = ate.pairs[chord_end];
