@@ -23,8 +23,10 @@ demo: build
 	./build/release/apps/builtscene/builtscene demo --out demo-out
 	@echo "Report: $(CURDIR)/demo-out/index.html"
 
+# Every test runs once: the end-to-end (slow) tests on the release tree, the unit tests under
+# ASan+UBSan (`ctest --preset release` still runs all of them on the release tree).
 test-release: build
-	ctest --preset release
+	ctest --preset release-slow
 
 test-asan: build-asan
 	ctest --preset asan
