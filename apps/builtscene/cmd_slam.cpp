@@ -42,7 +42,7 @@ struct SlamOptions {
   bool no_loop_closing = false;
   bool depth_links = false;
   double depth_link_weight = 1.0;
-  bool depth_planes = false;
+  bool depth_planes = slam::PlaneLandmarkOptions{}.enabled;
   double depth_plane_weight = 1.0;
   double motion_prior_cm = 0, motion_prior_deg = 0.3;
   double depth_prior = slam::TrackingOptions{}.depth_prior_weight;
@@ -323,11 +323,11 @@ const bool registered_slam = register_command({
                      "With --depth-links: scale of the links' information (1 = independent 1 cm depth noise)")
           ->capture_default_str()
           ->check(CLI::Range(1e-6, 1e6));
-      cmd.add_flag("--depth-planes", opt->depth_planes,
-                   "Experimental: the walls, floor and ceiling in each keyframe's depth become plane landmarks "
-                   "shared by the keyframes that see them, held in bundle adjustment (docs/slam.md, \"Plane landmarks\")");
+      cmd.add_flag("--depth-planes,!--no-depth-planes", opt->depth_planes,
+                   "The walls, floor and ceiling in each keyframe's depth become plane landmarks shared by the "
+                   "keyframes that see them, held in bundle adjustment (on by default; docs/slam.md, \"Plane landmarks\")");
       cmd.add_option("--depth-plane-weight", opt->depth_plane_weight,
-                     "With --depth-planes: scale of the planes' information (1 = 0.29 degrees and 1 cm per keyframe)")
+                     "Scale of the plane landmarks' information (1 = 0.29 degrees and 1 cm per keyframe)")
           ->capture_default_str()
           ->check(CLI::Range(1e-6, 1e6));
       cmd.add_option("--motion-prior", opt->motion_prior_cm,

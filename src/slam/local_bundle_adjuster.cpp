@@ -177,10 +177,11 @@ BundleAdjustmentResult solve_bundle_adjustment(const BundleAdjustmentProblem& pb
                                nullptr, &poses[6 * i], &poses[6 * j]);
       camera_used[i] = camera_used[j] = 1;
     }
-    for (const int held : pb.held_in_place) {
-      const auto c = static_cast<std::size_t>(held);
+    for (const auto& held : pb.held_in_place) {
+      const auto c = static_cast<std::size_t>(held.camera);
       if (c >= nc || pb.cameras[c].fixed) continue;
-      auto* cost = new HoldInPlaceCost{{}, 1.0 / pb.hold_sigma_rad, 1.0 / pb.hold_sigma_m};
+      const double spread = std::sqrt(static_cast<double>(std::max(held.group, 1)));
+      auto* cost = new HoldInPlaceCost{{}, 1.0 / (spread * pb.hold_sigma_rad), 1.0 / (spread * pb.hold_sigma_m)};
       detail::pose_to_block(pb.cameras[c].T_cw, cost->start);
       problem.AddResidualBlock(new ceres::AutoDiffCostFunction<HoldInPlaceCost, 6, 6>(cost), nullptr, &poses[6 * c]);
       camera_used[c] = 1;

@@ -56,10 +56,18 @@ struct BundleAdjustmentProblem {
   std::vector<Plane> planes;
   std::vector<PlaneObservation> plane_measurements;
   double plane_sigma_rad = 0.005, plane_sigma_m = 0.01;
-  // Cameras held near their starting pose (standard deviations hold_sigma_m on the centre's
-  // block translation, hold_sigma_rad on the rotation): where nothing else fixes a direction
-  // the plane terms leave free.
-  std::vector<int> held_in_place;
+  // Cameras held near their starting pose: where nothing else fixes a direction the plane
+  // terms leave free. A group of `group` cameras joined by shared points is held as a whole:
+  // each camera with standard deviations sqrt(group) * hold_sigma_m on the block translation
+  // and sqrt(group) * hold_sigma_rad on the rotation, so the group's common motion has
+  // hold_sigma_m and hold_sigma_rad whatever its size (a large group is shaped by its points,
+  // not by the hold).
+  struct Held {
+    int camera = 0;
+    int group = 1;
+    bool operator==(const Held&) const = default;
+  };
+  std::vector<Held> held_in_place;
   double hold_sigma_m = 0.05, hold_sigma_rad = 0.02;
 };
 

@@ -518,7 +518,7 @@ void LoopCloser::run_global_ba(long loop, long keyframe, long matched) {
       }
     }
     add_depth_links(cams, pb);  // TrackingOptions::depth_links
-    planes = add_plane_terms(cams, pb, opt_.planes, 0);
+    planes = add_plane_terms(cams, pb, opt_.planes, 0, /*hold_groups_as_a_whole=*/true);
   }
   {
     std::lock_guard s(stats_mutex_);

@@ -53,20 +53,41 @@ void associate_planes(KeyFrame& kf, Map& map, const PlaneLandmarkOptions& opt) {
 
 std::vector<std::shared_ptr<MapPlane>> add_plane_terms(std::vector<std::shared_ptr<KeyFrame>>& cams,
                                                        BundleAdjustmentProblem& pb, const PlaneLandmarkOptions& opt,
-                                                       int anchors) {
+                                                       int anchors, bool hold_groups_as_a_whole) {
   std::vector<std::shared_ptr<MapPlane>> planes;
   if (!opt.enabled) return planes;
-  // Planes leave the motion along them free: a keyframe whose points no fixed camera sees (made
-  // on the depth-odometry bridge, sharing none with the map) would slide along the walls with
-  // its points to wherever the planes' small disagreements pull it. Such cameras are held near
-  // where tracking put them, loosely (BundleAdjustmentProblem::held_in_place), so the planes
-  // still set their tilt, height and distance to the walls.
-  const bool held = std::any_of(pb.measurements.begin(), pb.measurements.end(), [&](const auto& m) {
-    return pb.cameras[static_cast<std::size_t>(m.camera)].fixed;
-  });
-  if (!held)
-    for (std::size_t c = 0; c < pb.cameras.size(); ++c)
-      if (!pb.cameras[c].fixed) pb.held_in_place.push_back(static_cast<int>(c));
+  // Planes leave the motion along them free: a group of cameras joined by shared points (or
+  // depth links) none of which is fixed would slide along the walls with its points to
+  // wherever the planes' small disagreements pull it. Such groups exist in local BA (keyframes
+  // made on the depth-odometry bridge share no point with the map) and in global BA (the
+  // keyframes just after a bridge, when the bridge's own are left out: in the office world one
+  // slid 1.4-4 m). Their cameras are held near where tracking put them, loosely
+  // (BundleAdjustmentProblem::held_in_place), so the planes still set their tilt, height and
+  // distance to the walls. With hold_groups_as_a_whole (global BA) the hold is on each group's
+  // common motion, so a group of hundreds of keyframes is still shaped by its points.
+  {
+    std::vector<int> group(pb.cameras.size());
+    for (std::size_t c = 0; c < group.size(); ++c) group[c] = static_cast<int>(c);
+    auto root = [&](int c) {
+      while (group[static_cast<std::size_t>(c)] != c) c = group[static_cast<std::size_t>(c)];
+      return c;
+    };
+    auto join = [&](int a, int b) { group[static_cast<std::size_t>(root(a))] = root(b); };
+    std::unordered_map<int, int> first_camera;  // per point
+    for (const auto& m : pb.measurements)
+      if (const auto [it, fresh] = first_camera.emplace(m.point, m.camera); !fresh) join(m.camera, it->second);
+    for (const auto& rp : pb.relative_poses) join(rp.i, rp.j);
+    std::vector<char> anchored(group.size(), 0);
+    std::vector<int> size(group.size(), 0);
+    for (std::size_t c = 0; c < group.size(); ++c) {
+      const auto r = static_cast<std::size_t>(root(static_cast<int>(c)));
+      if (pb.cameras[c].fixed) anchored[r] = 1;
+      else ++size[r];
+    }
+    for (std::size_t c = 0; c < group.size(); ++c)
+      if (const auto r = static_cast<std::size_t>(root(static_cast<int>(c))); !pb.cameras[c].fixed && !anchored[r])
+        pb.held_in_place.push_back({static_cast<int>(c), hold_groups_as_a_whole ? size[r] : 1});
+  }
   pb.plane_sigma_rad = opt.sigma_rad;
   pb.plane_sigma_m = opt.sigma_m;
   std::unordered_map<const MapPlane*, int> index;

@@ -1,5 +1,5 @@
 #pragma once
-// Plane landmarks (optional, `--depth-planes`): the walls, floor and ceiling a keyframe's
+// Plane landmarks (on by default; `--no-depth-planes` turns them off): the walls, floor and ceiling a keyframe's
 // depth sees (depth_planes.hpp) become map landmarks shared by every keyframe that sees the
 // same plane, and bundle adjustment holds each keyframe to its measured distance and tilt to
 // them. Down a corridor whose walls carry no features, the map points sit on the far end
@@ -29,7 +29,7 @@ class KeyFrame;
 class Map;
 
 struct PlaneLandmarkOptions {
-  bool enabled = false;
+  bool enabled = true;  // on by default since 2026-12-05 (docs/slam.md, "Plane landmarks by default")
   double sigma_rad = 0.005;  // a measured plane's normal (0.29 degrees)
   double sigma_m = 0.01;     // its distance
   double match_deg = 5;
@@ -64,13 +64,15 @@ void associate_planes(KeyFrame& kf, Map& map, const PlaneLandmarkOptions& opt);
 // Adds the plane measurements of the cameras in `cams` (pb.cameras in the same order) to
 // `pb`, each plane started at the inlier-weighted mean of its measurements from those
 // cameras; with anchors > 0 up to that many other observers of each plane are appended to
-// `cams` and `pb.cameras` as fixed cameras. When no fixed camera measures a point, the free
-// cameras are also held loosely in place (the planes alone would leave them sliding along
-// the walls). Returns the map planes in pb.planes' order.
+// `cams` and `pb.cameras` as fixed cameras. Free cameras that no chain of shared points (or
+// depth links) joins to a fixed camera are also held loosely in place (the planes alone would
+// leave them sliding along the walls): each at BundleAdjustmentProblem's hold sigmas, or with
+// hold_groups_as_a_whole each group's common motion at those sigmas (global BA, where such a
+// group can be most of the map). Returns the map planes in pb.planes' order.
 // Requires the map lock.
 std::vector<std::shared_ptr<MapPlane>> add_plane_terms(std::vector<std::shared_ptr<KeyFrame>>& cams,
                                                        BundleAdjustmentProblem& pb, const PlaneLandmarkOptions& opt,
-                                                       int anchors);
+                                                       int anchors, bool hold_groups_as_a_whole = false);
 
 // Writes bundle adjustment's solved planes (in add_plane_terms' order) back to the map planes.
 // Requires the map lock.
