@@ -34,8 +34,12 @@ struct SlamRun {
 
 SlamRun run_slam(const fs::path& world, const std::string& extra) {
   const auto traj = world / ("estimate" + std::to_string(extra.size()) + ".txt");
-  const auto r = run_cli("slam --json --sync-mapping --dataset " + shell_quote(world) + " --trajectory " +
-                         shell_quote(traj) + " " + extra);
+  // Without plane landmarks (on by default since 2026-12-05): the walls hold this room's run
+  // without loop closing to 1.0 cm, so the grids with and without loop closing both score
+  // 0.999 occupied precision and the comparison below would measure noise. Without planes the
+  // run drifts enough for loop closing to matter, which is what this test is about.
+  const auto r = run_cli("slam --json --sync-mapping --no-depth-planes --dataset " + shell_quote(world) +
+                         " --trajectory " + shell_quote(traj) + " " + extra);
   EXPECT_EQ(r.exit_code, 0) << r.err;
   SlamRun out;
   if (r.exit_code != 0) return out;
