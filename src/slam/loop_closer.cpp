@@ -6,6 +6,7 @@
 #include <unordered_map>
 #include <unordered_set>
 
+#include "core/disjoint_sets.hpp"
 #include "core/logging.hpp"
 #include "features/bow_vector.hpp"
 #include "slam/bow_matcher.hpp"
@@ -375,16 +376,11 @@ void LoopCloser::correct(const std::shared_ptr<KeyFrame>& kf, const LoopMatch& m
       }
       // Parts of the graph no edge joins move rigidly: more than one is a defect. (Keyframes
       // local mapping has not linked yet, in threaded runs, are left out of the count.)
-      std::vector<int> root(graph.nodes.size());
-      for (std::size_t i = 0; i < root.size(); ++i) root[i] = static_cast<int>(i);
-      const auto find = [&root](int i) {
-        while (root[static_cast<std::size_t>(i)] != i) i = root[static_cast<std::size_t>(i)] = root[static_cast<std::size_t>(root[static_cast<std::size_t>(i)])];
-        return i;
-      };
-      for (const auto& ed : graph.edges) root[static_cast<std::size_t>(find(ed.i))] = find(ed.j);
+      DisjointSets joined(graph.nodes.size());
+      for (const auto& ed : graph.edges) joined.join(ed.i, ed.j);
       std::set<int> part_roots;
-      for (std::size_t i = 0; i < root.size(); ++i)
-        if (i == 0 || node_kf[i]->has_parent_link) part_roots.insert(find(static_cast<int>(i)));
+      for (std::size_t i = 0; i < graph.nodes.size(); ++i)
+        if (i == 0 || node_kf[i]->has_parent_link) part_roots.insert(joined.find(static_cast<int>(i)));
       const auto parts = static_cast<long>(part_roots.size());
       {
         std::lock_guard s(stats_mutex_);

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <unordered_map>
 
+#include "core/disjoint_sets.hpp"
 #include "slam/key_frame.hpp"
 #include "slam/local_bundle_adjuster.hpp"
 #include "slam/map.hpp"
@@ -66,27 +67,23 @@ std::vector<std::shared_ptr<MapPlane>> add_plane_terms(std::vector<std::shared_p
   // distance to the walls. With hold_groups_as_a_whole (global BA) the hold is on each group's
   // common motion, so a group of hundreds of keyframes is still shaped by its points.
   {
-    std::vector<int> group(pb.cameras.size());
-    for (std::size_t c = 0; c < group.size(); ++c) group[c] = static_cast<int>(c);
-    auto root = [&](int c) {
-      while (group[static_cast<std::size_t>(c)] != c) c = group[static_cast<std::size_t>(c)];
-      return c;
-    };
-    auto join = [&](int a, int b) { group[static_cast<std::size_t>(root(a))] = root(b); };
+    const std::size_t n = pb.cameras.size();
+    DisjointSets groups(n);
     std::unordered_map<int, int> first_camera;  // per point
     for (const auto& m : pb.measurements)
-      if (const auto [it, fresh] = first_camera.emplace(m.point, m.camera); !fresh) join(m.camera, it->second);
-    for (const auto& rp : pb.relative_poses) join(rp.i, rp.j);
-    std::vector<char> anchored(group.size(), 0);
-    std::vector<int> size(group.size(), 0);
-    for (std::size_t c = 0; c < group.size(); ++c) {
-      const auto r = static_cast<std::size_t>(root(static_cast<int>(c)));
-      if (pb.cameras[c].fixed) anchored[r] = 1;
-      else ++size[r];
+      if (const auto [it, fresh] = first_camera.emplace(m.point, m.camera); !fresh) groups.join(m.camera, it->second);
+    for (const auto& rp : pb.relative_poses) groups.join(rp.i, rp.j);
+    std::vector<std::size_t> group_of(n);
+    std::vector<char> anchored(n, 0);
+    std::vector<int> size(n, 0);
+    for (std::size_t c = 0; c < n; ++c) {
+      const auto g = group_of[c] = static_cast<std::size_t>(groups.find(static_cast<int>(c)));
+      if (pb.cameras[c].fixed) anchored[g] = 1;
+      else ++size[g];
     }
-    for (std::size_t c = 0; c < group.size(); ++c)
-      if (const auto r = static_cast<std::size_t>(root(static_cast<int>(c))); !pb.cameras[c].fixed && !anchored[r])
-        pb.held_in_place.push_back({static_cast<int>(c), hold_groups_as_a_whole ? size[r] : 1});
+    for (std::size_t c = 0; c < n; ++c)
+      if (!pb.cameras[c].fixed && !anchored[group_of[c]])
+        pb.held_in_place.push_back({static_cast<int>(c), hold_groups_as_a_whole ? size[group_of[c]] : 1});
   }
   pb.plane_sigma_rad = opt.sigma_rad;
   pb.plane_sigma_m = opt.sigma_m;

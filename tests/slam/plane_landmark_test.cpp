@@ -266,8 +266,8 @@ TEST(PlaneLandmark, BundleAdjustmentTermsComeWithAnchorsAndHoldLoneCamerasInPlac
 // Global BA after a loop closure met a group of keyframes that shares no point with the rest
 // (made just after the depth-odometry bridge, whose own keyframes are left out): only the
 // walls tied it to the map, and walls leave the motion along them free. In the office world
-// such a group slid 1.4-4 m down the corridor (docs/slam.md, "Plane landmarks and groups
-// without a shared point"). Here: group A (its first camera fixed) and group B see their own
+// such a group slid 1.4-4 m down the corridor (docs/slam.md, "Plane landmarks by default, and
+// groups without a shared point"). Here: group A (its first camera fixed) and group B see their own
 // points and the same three planes; the right wall converges by 3 degrees and B's depth puts
 // it 2 cm off, which B could explain only by sliding 0.38 m along the corridor.
 TEST(PlaneLandmark, AGroupSharingNoPointWithTheFixedCamerasDoesNotSlideAlongTheWalls) {
