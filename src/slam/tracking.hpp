@@ -191,7 +191,9 @@ class Tracker {
   // Mean rotation per frame (rad) between the oldest and the newest of recent_poses_: a turn,
   // not the frame-to-frame jitter of a bridge (nothing before kTurnWindow + 1 poses).
   std::optional<double> recent_turn_rate() const;
-  SE3 odometry_prediction() const;
+  // The motion the depth odometry starts from and is pulled towards; `held`: it is the held
+  // feature-tracked speed of a straight drive (see the definition).
+  SE3 odometry_prediction(bool* held = nullptr) const;
   // No motion to extrapolate (start, loss, new map): the velocities and the bridge flag.
   void forget_motion();
   std::shared_ptr<KeyFrame> reference_;

@@ -132,7 +132,10 @@ TEST(CorridorStart, DepthOdometryBridgeKeepsTheSpeedAlongAPlainCorridor) {
 // jitters by 0.1-0.3 degrees (ICP noise), the hold dropped out every few frames and fed the
 // bridge's own speed back: frames 80-200 covered 0.84 of the true distance (frames 0-200:
 // 0.90), the 400 frames 19.3 cm RMSE. Judged on the net turn over 10 frames (tracking.cpp,
-// recent_turn_rate): 0.97 and 9.9 cm.
+// recent_turn_rate): 0.97 and 9.9 cm (13.6 cm with plane landmarks on). The held speed was
+// the features' last, 1.8 cm per frame while the robot still sped up to its 2.34; from frame
+// 36 to 80 a cabinet's end in the depth measures the true speed, and such bridge frames now
+// feed the held speed (depth_odometry.hpp, last_slide_measured): 5.2 cm, distance 1.02.
 TEST(CorridorStart, BridgeHoldsTheSpeedThroughRotationJitter) {
   const fs::path dir = generate_corridor_start(4, "bs_corridor_jitter", 400);
   const auto data = TumDataset::open(dir / "seq");
@@ -140,8 +143,9 @@ TEST(CorridorStart, BridgeHoldsTheSpeedThroughRotationJitter) {
   std::printf("corridor seed 4, 400 frames: %ld tracked, ATE %.2f cm (max %.2f), distance to frame %zu: %.3f of the truth\n",
               result.tracked, 100 * result.rmse, 100 * result.max, chord_end, result.chord_ratio);
   EXPECT_EQ(result.tracked, 400);
-  EXPECT_GT(result.chord_ratio, 0.93);
-  EXPECT_LT(result.rmse, 0.14);
+  EXPECT_GT(result.chord_ratio, 0.95);
+  EXPECT_LT(result.chord_ratio, 1.05);
+  EXPECT_LT(result.rmse, 0.08);
   fs::remove_all(dir);
 }
 
