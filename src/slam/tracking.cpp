@@ -150,19 +150,21 @@ TrackingOutcome Tracker::track(Frame frame) {
       has_velocity_ = was_ok && !relocalized;
       // The first frame features hold again after a bridge also carries the correction of the
       // bridge's drift: not a velocity.
-      if (has_velocity_ && !by_depth && !last_by_depth_) {
+      const bool by_features = has_velocity_ && !by_depth && !last_by_depth_;
+      // A bridge frame whose depth measured the motion along its direction (structure facing
+      // it) also says how fast the camera moves; one that kept the prediction there does not.
+      // The generated corridor, seed 4: the features give out at frame 19 while the robot
+      // still speeds up, a cabinet's end in the depth measures 2.3 cm per frame to frame 80
+      // against the features' last 1.8, and from frame 150 the plain corridor holds the speed.
+      const bool measured_bridge =
+          has_velocity_ && by_depth && depth_odometry_ && depth_odometry_->last_slide_measured();
+      if (by_features || measured_bridge) {
         recent_speeds_.push_back(velocity_.translation().norm());
         if (recent_speeds_.size() > 30) recent_speeds_.pop_front();
+      }
+      if (by_features) {
         feature_velocity_ = velocity_;
         has_feature_velocity_ = true;
-      } else if (has_velocity_ && by_depth && depth_odometry_ && depth_odometry_->last_slide_measured()) {
-        // A bridge frame whose depth measured the motion along its direction (structure facing
-        // it) also says how fast the camera moves; one that kept the prediction there does not.
-        // The generated corridor, seed 4: the features give out at frame 19 while the robot
-        // still speeds up, a cabinet's end in the depth measures 2.3 cm per frame to frame 80
-        // against the features' last 1.8, and from frame 150 the plain corridor holds the speed.
-        recent_speeds_.push_back(velocity_.translation().norm());
-        if (recent_speeds_.size() > 30) recent_speeds_.pop_front();
       }
       if (!has_velocity_) {
         recent_speeds_.clear();

@@ -185,7 +185,7 @@ class Tracker {
   SE3 feature_velocity_;  // velocity_ of the last frame tracked by features (odometry_prediction)
   bool has_feature_velocity_ = false;
   bool last_by_depth_ = false;  // the last frame was carried by the depth odometry
-  std::deque<double> recent_speeds_;  // metres per frame of the last frames tracked by features
+  std::deque<double> recent_speeds_;  // metres per frame of the last frames tracked by features or measured bridge frames
   std::deque<SE3> recent_poses_;      // T_cw of the last kTurnWindow + 1 tracked frames, newest last
   static constexpr std::size_t kTurnWindow = 10;
   // Mean rotation per frame (rad) between the oldest and the newest of recent_poses_: a turn,
