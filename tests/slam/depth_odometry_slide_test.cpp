@@ -17,35 +17,25 @@
 #include "slam/depth_odometry.hpp"
 #include "slam/icp_with_motion_prior.hpp"
 #include "synth/sensor_noise.hpp"
+#include "plane_depth_render.hpp"
 
 namespace builtscene::slam {
 namespace depth_odometry_slide_test {
 
-constexpr double kFx = 525, kFy = 525, kCx = 319.5, kCy = 239.5;
 constexpr double kTrueStep = 0.0234, kPredictedStep = 0.018;
 constexpr int kFrames = 12;
 
-struct Plane {
-  Eigen::Vector3d n;  // unit normal
-  double d;           // n . x = d on the plane
-};
+using test::kCx;
+using test::kCy;
+using test::kFx;
+using test::kFy;
+using test::Plane;
 
 // Camera looking along +z, y down, at z = position; Kinect-like depth of the nearest plane.
 cv::Mat render(const std::vector<Plane>& planes, double position, int frame) {
-  cv::Mat depth(480, 640, CV_32F, cv::Scalar(0)), incidence(480, 640, CV_32F, cv::Scalar(0));
-  for (int v = 0; v < depth.rows; ++v)
-    for (int u = 0; u < depth.cols; ++u) {
-      const Eigen::Vector3d ray((u - kCx) / kFx, (v - kCy) / kFy, 1.0);  // z = 1: the scale is depth
-      double best = 0, cos = 0;
-      for (const auto& p : planes) {
-        const double denom = p.n.dot(ray);
-        if (std::abs(denom) < 1e-9) continue;
-        const double z = (p.d - p.n.z() * position) / denom;
-        if (z > 0.3 && (best == 0 || z < best)) best = z, cos = std::abs(denom) / ray.norm();
-      }
-      depth.at<float>(v, u) = static_cast<float>(best);
-      incidence.at<float>(v, u) = static_cast<float>(cos);
-    }
+  cv::Mat incidence;
+  const cv::Mat depth =
+      test::render_planes(planes, SE3(Eigen::Quaterniond::Identity(), Eigen::Vector3d(0, 0, -position)), 0, &incidence);
   synth::FrameRng rng(7, static_cast<std::uint64_t>(frame), 1);
   return synth::apply_kinect_noise(depth, incidence, synth::KinectNoiseModel{}, rng);
 }

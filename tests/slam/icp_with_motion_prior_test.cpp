@@ -12,37 +12,19 @@
 
 #include "core/so3.hpp"
 #include "slam/icp_with_motion_prior.hpp"
+#include "plane_depth_render.hpp"
 
 namespace builtscene::slam {
 namespace {
 
-constexpr double kFx = 525, kFy = 525, kCx = 319.5, kCy = 239.5;
-
-struct Plane {
-  Eigen::Vector3d n;  // unit normal, world
-  double d;           // n . x = d on the plane
-};
+using test::kCx;
+using test::kCy;
+using test::kFx;
+using test::kFy;
+using test::Plane;
 
 // Depth image of the planes seen by a camera at T_cw (world -> camera): the nearest hit.
-cv::Mat render(const std::vector<Plane>& planes, const SE3& T_cw) {
-  const SE3 T_wc = T_cw.inverse();
-  const Eigen::Matrix3d R_wc = T_wc.rotation_matrix();
-  cv::Mat depth(480, 640, CV_32F, cv::Scalar(0));
-  for (int v = 0; v < depth.rows; ++v)
-    for (int u = 0; u < depth.cols; ++u) {
-      const Eigen::Vector3d ray_c((u - kCx) / kFx, (v - kCy) / kFy, 1.0);  // z = 1: the scale is depth
-      const Eigen::Vector3d ray_w = R_wc * ray_c;
-      double best = 0;
-      for (const auto& p : planes) {
-        const double denom = p.n.dot(ray_w);
-        if (std::abs(denom) < 1e-9) continue;
-        const double z = (p.d - p.n.dot(T_wc.translation())) / denom;
-        if (z > 0.3 && (best == 0 || z < best)) best = z;
-      }
-      depth.at<float>(v, u) = static_cast<float>(best > 6.0 ? 0.0 : best);
-    }
-  return depth;
-}
+cv::Mat render(const std::vector<Plane>& planes, const SE3& T_cw) { return test::render_planes(planes, T_cw, 6.0); }
 
 double translation_error(const SE3& a, const SE3& b) { return (a.translation() - b.translation()).norm(); }
 double rotation_error_deg(const SE3& a, const SE3& b) {
