@@ -284,7 +284,7 @@ void LoopCloser::correct(const std::shared_ptr<KeyFrame>& kf, const LoopMatch& m
   }
   LoopEvent event;
   bool closed = false;
-  int fused = 0;
+  int fused = 0, planes_merged = 0;
   {
     std::lock_guard lock(map_.mutex());
     KeyFrame* cand = m.candidate.get();
@@ -421,6 +421,9 @@ void LoopCloser::correct(const std::shared_ptr<KeyFrame>& kf, const LoopMatch& m
           p->update_normal_and_depth();
         }
       }
+      // The planes stayed where the drifted keyframes had put them: re-estimated from their
+      // observers at the corrected poses, and a wall's plane from each lap joined into one.
+      if (opt_.planes.enabled) planes_merged = refit_and_merge_planes(map_, opt_.planes);
       ++loops_;
       last_loop_kf_id_ = kf->id;
       consistency_.reset();
@@ -434,9 +437,9 @@ void LoopCloser::correct(const std::shared_ptr<KeyFrame>& kf, const LoopMatch& m
       event.correction = m.T_cw.inverse() * before[kf.get()];
       event.keyframes = keyframe_poses(map_);
       spdlog::info("loop closed: keyframe {} (frame {}) with keyframe {}, {} inliers, correction {:.3f} m, {} fused, "
-                   "{} graph edges",
+                   "{} graph edges, {} planes merged",
                    kf->id, kf->frame_id, cand->id, m.inliers, event.correction.translation().norm(), fused,
-                   graph.edges.size());
+                   graph.edges.size(), planes_merged);
     }
   }
   if (mapping_) mapping_->resume();
@@ -563,6 +566,7 @@ void LoopCloser::run_global_ba(long loop, long keyframe, long matched) {
       p->update_normal_and_depth();
     }
     store_solved_planes(planes, r.planes);
+    if (opt_.planes.enabled) refit_and_merge_planes(map_, opt_.planes, /*refit=*/false);
     event.stage = LoopEvent::Stage::kGlobalBundleAdjustment;
     event.loop = loop;
     event.keyframe = keyframe;

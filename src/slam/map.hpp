@@ -40,6 +40,7 @@ class Map {
   // Plane landmarks (plane_landmark.hpp), in the order they were made.
   void add_plane(const std::shared_ptr<MapPlane>& p) { planes_.push_back(p); }
   const std::vector<std::shared_ptr<MapPlane>>& planes() const { return planes_; }
+  void erase_plane(const MapPlane* p) { std::erase_if(planes_, [p](const auto& q) { return q.get() == p; }); }
   long next_plane_id() { return next_plane_id_++; }
 
   // Thread-safe id sources.

@@ -141,6 +141,97 @@ std::vector<std::shared_ptr<MapPlane>> add_plane_terms(std::vector<std::shared_p
   return planes;
 }
 
+namespace {
+
+std::vector<std::shared_ptr<KeyFrame>> live_observers(MapPlane& plane) {
+  std::erase_if(plane.observers, [](const std::weak_ptr<KeyFrame>& o) {
+    const auto k = o.lock();
+    return !k || k->bad;
+  });
+  std::vector<std::shared_ptr<KeyFrame>> out;
+  for (const auto& o : plane.observers) out.push_back(o.lock());
+  return out;
+}
+
+// The inlier-weighted mean of the plane's measurements by its observers at their poses; false
+// when none of them measures it any more.
+bool refit_plane(MapPlane& plane) {
+  Eigen::Vector3d n = Eigen::Vector3d::Zero();
+  double d = 0, w = 0;
+  const auto observers = live_observers(plane);
+  for (const auto& k : observers)
+    for (const auto& kp : k->planes) {
+      if (kp.landmark.get() != &plane) continue;
+      const PlaneMeasurement m = plane_in_world(kp.m, k->pose());
+      const double wt = static_cast<double>(std::max<std::size_t>(kp.m.inliers, 1));
+      n += wt * m.n_c;
+      d += wt * m.d_c;
+      w += wt;
+    }
+  if (observers.empty()) return false;
+  plane.last_seen_from = observers.back()->camera_center();
+  if (w <= 0 || n.norm() <= 0) return false;
+  plane.n_w = n.normalized();
+  plane.d_w = d / w;
+  return true;
+}
+
+bool observed_near(const std::vector<std::shared_ptr<KeyFrame>>& a, const std::vector<std::shared_ptr<KeyFrame>>& b,
+                   double range_m) {
+  for (const auto& x : a) {
+    const Eigen::Vector3d c = x->camera_center();
+    for (const auto& y : b)
+      if ((y->camera_center() - c).norm() <= range_m) return true;
+  }
+  return false;
+}
+
+}  // namespace
+
+int refit_and_merge_planes(Map& map, const PlaneLandmarkOptions& opt, bool refit) {
+  if (refit)
+    for (const auto& p : map.planes()) refit_plane(*p);
+  const double cos_match = std::cos(opt.match_deg * M_PI / 180.0);
+  const auto planes = map.planes();  // oldest first
+  std::vector<char> gone(planes.size(), 0);
+  int merged = 0;
+  for (std::size_t i = 0; i < planes.size(); ++i) {
+    if (gone[i]) continue;
+    MapPlane& keep = *planes[i];
+    for (std::size_t j = i + 1; j < planes.size(); ++j) {
+      if (gone[j]) continue;
+      MapPlane& other = *planes[j];
+      if (keep.n_w.dot(other.n_w) < cos_match || std::abs(keep.d_w - other.d_w) > opt.match_m) continue;
+      const auto keep_obs = live_observers(keep), other_obs = live_observers(other);
+      if (!observed_near(keep_obs, other_obs, opt.match_range_m)) continue;
+      const double wk = static_cast<double>(keep_obs.size()), wo = static_cast<double>(other_obs.size());
+      const Eigen::Vector3d n_mean = wk * keep.n_w + wo * other.n_w;
+      const double d_mean = wk + wo > 0 ? (wk * keep.d_w + wo * other.d_w) / (wk + wo) : keep.d_w;
+      for (const auto& k : other_obs) {
+        for (auto& kp : k->planes)
+          if (kp.landmark.get() == &other) kp.landmark = planes[i];
+        if (std::none_of(keep_obs.begin(), keep_obs.end(), [&](const auto& x) { return x == k; }))
+          keep.observers.push_back(k);
+      }
+      // Observers in the order they joined: by keyframe id.
+      std::sort(keep.observers.begin(), keep.observers.end(), [](const auto& a, const auto& b) {
+        return a.lock()->id < b.lock()->id;
+      });
+      if (!refit || !refit_plane(keep)) {
+        if (n_mean.norm() > 0) keep.n_w = n_mean.normalized();
+        keep.d_w = d_mean;
+        keep.last_seen_from = keep.observers.empty() ? keep.last_seen_from : keep.observers.back().lock()->camera_center();
+      }
+      other.observers.clear();
+      gone[j] = 1;
+      ++merged;
+    }
+  }
+  for (std::size_t j = 0; j < planes.size(); ++j)
+    if (gone[j]) map.erase_plane(planes[j].get());
+  return merged;
+}
+
 void store_solved_planes(const std::vector<std::shared_ptr<MapPlane>>& planes,
                          const std::vector<BundleAdjustmentProblem::Plane>& solved) {
   for (std::size_t j = 0; j < planes.size() && j < solved.size(); ++j) {

@@ -12,8 +12,9 @@
 // whose offset is within match_m and which was last seen from within match_range_m; else it
 // starts a new one. Bundle adjustment refines the planes with the poses (local BA also holds
 // up to `anchors` older observers of each local plane fixed, so the new keyframes are pulled
-// to where the plane has been all along). Not saved with the map: a loaded map starts
-// without planes.
+// to where the plane has been all along). A loop correction moves keyframes under their
+// planes: refit_and_merge_planes() then re-estimates each plane from its observers and joins
+// the planes of one wall that the drift had kept apart. Saved with the map (version 4).
 #include <memory>
 #include <vector>
 
@@ -73,6 +74,16 @@ void associate_planes(KeyFrame& kf, Map& map, const PlaneLandmarkOptions& opt);
 std::vector<std::shared_ptr<MapPlane>> add_plane_terms(std::vector<std::shared_ptr<KeyFrame>>& cams,
                                                        BundleAdjustmentProblem& pb, const PlaneLandmarkOptions& opt,
                                                        int anchors, bool hold_groups_as_a_whole = false);
+
+// After a loop correction moved keyframes (the pose graph; global BA with refit = false):
+// with refit, each map plane is re-estimated as the inlier-weighted mean of its live observers'
+// measurements at their current poses, and its last_seen_from is its newest observer's centre.
+// Then planes of one surface are merged: normals within match_deg, offsets within match_m, and
+// some observer of one within match_range_m of some observer of the other (a wall seen on two
+// laps of a loop, which the drift had kept apart). The older plane absorbs the newer one's
+// observers and keyframe measurements; without refit the merged plane is the two planes' mean
+// weighted by observers. Returns the number of planes merged away. Requires the map lock.
+int refit_and_merge_planes(Map& map, const PlaneLandmarkOptions& opt, bool refit = true);
 
 // Writes bundle adjustment's solved planes (in add_plane_terms' order) back to the map planes.
 // Requires the map lock.

@@ -317,5 +317,95 @@ TEST(PlaneLandmark, AGroupSharingNoPointWithTheFixedCamerasDoesNotSlideAlongTheW
   }
 }
 
+// A loop around a corridor: lap 1's keyframes were associated while drifted by a rigid D1 (their
+// walls went into the map moved by D1), lap 2's at the same places while drifted by D2 (0.3 m
+// sideways and 0.2 m in height: too far from lap 1's walls, so each wall got a second plane).
+// The loop correction puts every keyframe back at its true pose; the planes must follow: each
+// wall one plane again, at the truth, with both laps' keyframes as observers.
+TEST(PlaneLandmark, ALoopCorrectionRefitsThePlanesAndJoinsEachWallsTwoLaps) {
+  Map map;
+  std::lock_guard lock(map.mutex());
+  PlaneLandmarkOptions opt;
+  opt.enabled = true;
+  const TruePlane left{{1, 0, 0}, 0.7}, right{{-1, 0, 0}, 1.3}, floor{{0, -1, 0}, 1.0};
+  const TruePlane cabinet{{1, 0, 0}, 0.6};  // 10 cm in front of the left wall, seen on lap 2 only
+  const SE3 d1(so3_exp(Eigen::Vector3d(0, 1.0 * M_PI / 180, 0)), Eigen::Vector3d(0, 0.05, 0));
+  const SE3 d2(Eigen::Quaterniond::Identity(), Eigen::Vector3d(0.3, 0.2, 0));
+  std::vector<std::shared_ptr<KeyFrame>> lap1, lap2;
+  // Measured from the true centre, tracked at drift * truth (camera -> world).
+  auto drifted = [&](const Eigen::Vector3d& c, const std::vector<TruePlane>& seen, const SE3& drift) {
+    auto kf = keyframe_seeing(map, c, seen);
+    kf->set_pose((drift * kf->pose().inverse()).inverse());
+    associate_planes(*kf, map, opt);
+    return kf;
+  };
+  for (int i = 0; i < 12; ++i) lap1.push_back(drifted({0, 0, 0.5 * i}, {left, right, floor}, d1));
+  for (int i = 0; i < 12; ++i) lap2.push_back(drifted({0, 0, 0.5 * i}, {left, right, floor, cabinet}, d2));
+  // The same left wall 20 m further on, seen by one keyframe only, more than match_range_m from
+  // every other observer: a plane of its own, before and after.
+  auto far = drifted({0, 0, 20.0}, {left}, SE3());
+  ASSERT_EQ(map.planes().size(), 8u);  // 3 per lap, the cabinet, the far wall
+  ASSERT_NE(lap2[0]->planes[0].landmark, lap1[0]->planes[0].landmark);
+
+  // The correction: every keyframe back at its true pose.
+  for (int i = 0; i < 12; ++i)
+    for (auto* lap : {&lap1, &lap2})
+      (*lap)[static_cast<std::size_t>(i)]->set_pose(SE3(Eigen::Quaterniond::Identity(), -Eigen::Vector3d(0, 0, 0.5 * i)));
+
+  EXPECT_EQ(refit_and_merge_planes(map, opt), 3);
+  ASSERT_EQ(map.planes().size(), 5u);
+  const std::vector<TruePlane> walls = {left, right, floor};
+  for (std::size_t k = 0; k < walls.size(); ++k) {
+    const auto& plane = lap1[0]->planes[k].landmark;
+    for (std::size_t i = 0; i < 12; ++i) {
+      EXPECT_EQ(lap1[i]->planes[k].landmark, plane) << "wall " << k << " lap 1 keyframe " << i;
+      EXPECT_EQ(lap2[i]->planes[k].landmark, plane) << "wall " << k << " lap 2 keyframe " << i;
+    }
+    EXPECT_LT(angle_between_deg(plane->n_w, walls[k].n), 1e-6) << "wall " << k;
+    EXPECT_NEAR(plane->d_w, walls[k].d, 1e-9) << "wall " << k;
+    EXPECT_EQ(plane->observers.size(), 24u) << "wall " << k;
+    // The newest observer (lap 2, 5.5 m down the corridor) is where the plane was last seen.
+    EXPECT_LT((plane->last_seen_from - Eigen::Vector3d(0, 0, 5.5)).norm(), 1e-9) << "wall " << k;
+  }
+  const auto& cab = lap2[0]->planes[3].landmark;
+  EXPECT_NE(cab, lap1[0]->planes[0].landmark);
+  EXPECT_NEAR(cab->d_w, cabinet.d, 1e-9);
+  EXPECT_NE(far->planes[0].landmark, lap1[0]->planes[0].landmark);
+  // Nothing left to merge: a second call changes nothing.
+  EXPECT_EQ(refit_and_merge_planes(map, opt), 0);
+  EXPECT_EQ(map.planes().size(), 5u);
+}
+
+// Global BA's own planes are kept (no refit); two that coincide are joined at their mean
+// weighted by observers.
+TEST(PlaneLandmark, MergingWithoutRefitTakesTheObserverWeightedMean) {
+  Map map;
+  std::lock_guard lock(map.mutex());
+  PlaneLandmarkOptions opt;
+  opt.enabled = true;
+  const TruePlane left{{1, 0, 0}, 0.7};
+  std::vector<std::shared_ptr<KeyFrame>> kfs;
+  for (int i = 0; i < 4; ++i) {
+    kfs.push_back(keyframe_seeing(map, {0, 0, 0.5 * i}, {left}));
+    associate_planes(*kfs.back(), map, opt);
+  }
+  ASSERT_EQ(map.planes().size(), 1u);
+  // A second plane of the same wall (as a drifted lap would have made), observed by one keyframe.
+  auto extra = keyframe_seeing(map, {0, 0, 1.0}, {left});
+  auto second = std::make_shared<MapPlane>();
+  second->id = map.next_plane_id();
+  second->n_w = Eigen::Vector3d(1, 0, 0);
+  second->d_w = 0.74;
+  second->observers.push_back(extra);
+  extra->planes[0].landmark = second;
+  map.add_plane(second);
+  map.planes()[0]->d_w = 0.70;
+  EXPECT_EQ(refit_and_merge_planes(map, opt, /*refit=*/false), 1);
+  ASSERT_EQ(map.planes().size(), 1u);
+  EXPECT_NEAR(map.planes()[0]->d_w, (4 * 0.70 + 1 * 0.74) / 5, 1e-12);
+  EXPECT_EQ(extra->planes[0].landmark, map.planes()[0]);
+  EXPECT_EQ(map.planes()[0]->observers.size(), 5u);
+}
+
 }  // namespace
 }  // namespace builtscene::slam
