@@ -42,6 +42,8 @@ class Map {
   const std::vector<std::shared_ptr<MapPlane>>& planes() const { return planes_; }
   void erase_plane(const MapPlane* p) { std::erase_if(planes_, [p](const auto& q) { return q.get() == p; }); }
   long next_plane_id() { return next_plane_id_++; }
+  long peek_next_plane_id() const { return next_plane_id_; }
+  void set_next_plane_id(long id) { next_plane_id_ = id; }
 
   // Thread-safe id sources.
   long next_keyframe_id() { return next_kf_id_++; }

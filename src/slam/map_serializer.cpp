@@ -16,6 +16,7 @@
 #include "slam/key_frame.hpp"
 #include "slam/map.hpp"
 #include "slam/map_point.hpp"
+#include "slam/plane_landmark.hpp"
 
 namespace builtscene::slam {
 
@@ -33,11 +34,15 @@ constexpr std::uint32_t tag(const char (&s)[5]) {
          static_cast<std::uint32_t>(static_cast<unsigned char>(s[3])) << 24;
 }
 constexpr std::uint32_t kContextTag = tag("CTXT"), kKeyFramesTag = tag("KFRM"), kPointsTag = tag("MPTS"),
-                        kCovisibilityTag = tag("COVI"), kLoopEdgesTag = tag("LOOP"), kDepthLinksTag = tag("DLNK");
-// Version 2 added the loop edges, version 3 the depth links; older files still load.
-constexpr std::uint32_t kSectionOrder[] = {kContextTag,      kKeyFramesTag, kPointsTag,
-                                           kCovisibilityTag, kLoopEdgesTag, kDepthLinksTag};
-constexpr std::size_t section_count(std::uint32_t version) { return version >= 3 ? 6 : version == 2 ? 5 : 4; }
+                        kCovisibilityTag = tag("COVI"), kLoopEdgesTag = tag("LOOP"), kDepthLinksTag = tag("DLNK"),
+                        kPlanesTag = tag("PLAN");
+// Version 2 added the loop edges, version 3 the depth links, version 4 the plane landmarks;
+// older files still load.
+constexpr std::uint32_t kSectionOrder[] = {kContextTag,   kKeyFramesTag,  kPointsTag, kCovisibilityTag,
+                                           kLoopEdgesTag, kDepthLinksTag, kPlanesTag};
+constexpr std::size_t section_count(std::uint32_t version) { return version >= 4 ? 7 : version == 3 ? 6 : version == 2 ? 5 : 4; }
+constexpr std::size_t kMapPlaneBytes = 8 + 7 * 8 + 4;
+constexpr std::size_t kPlaneMeasurementBytes = 4 * 8 + 8 + 8;
 constexpr std::size_t kDepthLinkBytes = 16 + 7 * 8 + 21 * 8;
 constexpr std::size_t kKeypointBytes = 7 * 4;
 
@@ -401,8 +406,44 @@ std::vector<std::uint8_t> encode_map(const Map& map, const FrameContext& ctx, st
       for (int c = r; c < 6; ++c) dw.put(kf->depth_link_information(r, c));
   }
 
-  const std::size_t body_size = 6 * 16 + context.bytes.size() + kfw.bytes.size() + pw.bytes.size() +
-                                cw.bytes.size() + lw.bytes.size() + dw.bytes.size();
+  // Plane landmarks (plane_landmark.hpp): the next plane id; the map planes by id, each with
+  // n_w, d_w, last_seen_from and its saved observers in the order they joined; then per
+  // keyframe with measured planes its measurements (n_c, d_c, inliers, map plane id or -1).
+  Writer plw;
+  plw.put(static_cast<std::int64_t>(map.peek_next_plane_id()));
+  auto planes = map.planes();
+  std::sort(planes.begin(), planes.end(), [](const auto& a, const auto& b) { return a->id < b->id; });
+  std::unordered_set<const MapPlane*> saved_planes;
+  plw.put(static_cast<std::uint32_t>(planes.size()));
+  for (const auto& pl : planes) {
+    saved_planes.insert(pl.get());
+    plw.put(static_cast<std::int64_t>(pl->id));
+    for (int i = 0; i < 3; ++i) plw.put(pl->n_w[i]);
+    plw.put(pl->d_w);
+    for (int i = 0; i < 3; ++i) plw.put(pl->last_seen_from[i]);
+    std::vector<long> observers;
+    for (const auto& o : pl->observers)
+      if (const auto k = o.lock(); k && saved_kfs.count(k.get())) observers.push_back(k->id);
+    plw.put(static_cast<std::uint32_t>(observers.size()));
+    for (long id : observers) plw.put(static_cast<std::int64_t>(id));
+  }
+  std::vector<const KeyFrame*> measuring;
+  for (const auto& kf : keyframes)
+    if (!kf->planes.empty()) measuring.push_back(kf.get());
+  plw.put(static_cast<std::uint32_t>(measuring.size()));
+  for (const KeyFrame* kf : measuring) {
+    plw.put(static_cast<std::int64_t>(kf->id));
+    plw.put(static_cast<std::uint32_t>(kf->planes.size()));
+    for (const auto& kp : kf->planes) {
+      for (int i = 0; i < 3; ++i) plw.put(kp.m.n_c[i]);
+      plw.put(kp.m.d_c);
+      plw.put(static_cast<std::uint64_t>(kp.m.inliers));
+      plw.put(static_cast<std::int64_t>(kp.landmark && saved_planes.count(kp.landmark.get()) ? kp.landmark->id : -1));
+    }
+  }
+
+  const std::size_t body_size = 7 * 16 + context.bytes.size() + kfw.bytes.size() + pw.bytes.size() +
+                                cw.bytes.size() + lw.bytes.size() + dw.bytes.size() + plw.bytes.size();
   Writer out;
   out.bytes.reserve(kHeaderSize + body_size);
   out.raw(kMagic, sizeof(kMagic));
@@ -420,6 +461,7 @@ std::vector<std::uint8_t> encode_map(const Map& map, const FrameContext& ctx, st
   section(out, kCovisibilityTag, cw);
   section(out, kLoopEdgesTag, lw);
   section(out, kDepthLinksTag, dw);
+  section(out, kPlanesTag, plw);
   return std::move(out.bytes);
 }
 
@@ -675,6 +717,61 @@ MapFileInfo decode_map(const std::uint8_t* data, std::size_t size, const std::st
     }
     dr.expect_end();
   }
+  std::vector<std::shared_ptr<MapPlane>> planes;
+  std::vector<std::pair<KeyFrame*, std::vector<KeyFramePlane>>> keyframe_planes;
+  long next_plane_id = 0;
+  if (version >= 4) {
+    Reader plr(spans[6].data, spans[6].size, name, "PLAN");
+    next_plane_id = plr.get<std::int64_t>("next plane id");
+    const std::size_t n_planes = plr.count(kMapPlaneBytes, "plane count");
+    std::unordered_map<long, std::shared_ptr<MapPlane>> plane_by_id;
+    auto unit = [&](Reader& r, const char* what, const std::string& whose) {
+      const Eigen::Vector3d n = r.vec3(what);
+      if (std::abs(n.norm() - 1.0) > 1e-6) r.fail(fmt::format("{}: {} is not a unit vector", whose, what));
+      return n;
+    };
+    for (std::size_t i = 0; i < n_planes; ++i) {
+      auto pl = std::make_shared<MapPlane>();
+      pl->id = plr.get<std::int64_t>("plane id");
+      if (pl->id < 0 || pl->id >= next_plane_id)
+        plr.fail(fmt::format("plane id {} is outside 0 to the next plane id {}", pl->id, next_plane_id));
+      if (plane_by_id.count(pl->id)) plr.fail(fmt::format("plane {} appears twice", pl->id));
+      pl->n_w = unit(plr, "plane normal", fmt::format("plane {}", pl->id));
+      pl->d_w = plr.finite("plane offset");
+      pl->last_seen_from = plr.vec3("plane last seen from");
+      const std::size_t n_obs = plr.count(8, "plane observer count");
+      std::unordered_set<long> seen;
+      for (std::size_t o = 0; o < n_obs; ++o) {
+        const long kid = plr.get<std::int64_t>("plane observer");
+        KeyFrame* k = lookup(kf_by_id, kid, plr, fmt::format("plane {}'s observer", pl->id));
+        if (!seen.insert(kid).second) plr.fail(fmt::format("plane {}: keyframe {} observes it twice", pl->id, kid));
+        pl->observers.push_back(k->shared_from_this());
+      }
+      plane_by_id[pl->id] = pl;
+      planes.push_back(pl);
+    }
+    const std::size_t n_measuring = plr.count(12, "measuring keyframe count");
+    std::unordered_set<long> measured;
+    for (std::size_t i = 0; i < n_measuring; ++i) {
+      const long kid = plr.get<std::int64_t>("measuring keyframe");
+      KeyFrame* k = lookup(kf_by_id, kid, plr, "plane measurements");
+      if (!measured.insert(kid).second) plr.fail(fmt::format("keyframe {}'s plane measurements appear twice", kid));
+      const std::size_t n_m = plr.count(kPlaneMeasurementBytes, "plane measurement count");
+      std::vector<KeyFramePlane> list;
+      for (std::size_t j = 0; j < n_m; ++j) {
+        KeyFramePlane kp;
+        kp.m.n_c = unit(plr, "measured plane normal", fmt::format("keyframe {}", kid));
+        kp.m.d_c = plr.finite("measured plane offset");
+        kp.m.inliers = static_cast<std::size_t>(plr.get<std::uint64_t>("measured plane inliers"));
+        const long pid = plr.get<std::int64_t>("measured plane's map plane");
+        if (pid >= 0) kp.landmark = lookup(plane_by_id, pid, plr, fmt::format("keyframe {}'s plane measurement", kid));
+        list.push_back(std::move(kp));
+      }
+      keyframe_planes.emplace_back(k, std::move(list));
+    }
+    plr.expect_end();
+  }
+  for (auto& [kf, list] : keyframe_planes) kf->planes = std::move(list);
   for (const auto& [a, b] : loop_edges) {
     a->loop_edges.insert(b);
     b->loop_edges.insert(a);
@@ -695,7 +792,9 @@ MapFileInfo decode_map(const std::uint8_t* data, std::size_t size, const std::st
   map.clear();
   for (auto& kf : kfs) map.add_keyframe(kf);
   for (auto& p : pts) map.add_point(p);
+  for (auto& pl : planes) map.add_plane(pl);
   map.set_next_ids(c.next_kf_id, c.next_point_id);
+  map.set_next_plane_id(next_plane_id);
   MapFileInfo info;
   info.version = version;
   info.vocabulary_checksum = vocabulary;

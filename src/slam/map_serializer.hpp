@@ -17,10 +17,16 @@
 // u32 count, then pairs of i64 keyframe ids, smaller id first; since version 2), "DLNK"
 // (depth links of `slam --depth-links`: u32 count, then per link i64 keyframe id, i64 id of
 // the keyframe it is aligned to, the relative pose as quaternion w x y z and translation,
-// and the upper triangle of its 6 x 6 information row by row, 21 doubles; since version 3).
+// and the upper triangle of its 6 x 6 information row by row, 21 doubles; since version 3),
+// "PLAN" (plane landmarks, plane_landmark.hpp: i64 next plane id; u32 count, then per map
+// plane by id i64 id, normal n_w (3 doubles, unit), offset d_w, last_seen_from (3 doubles),
+// u32 observer count and the observers' i64 keyframe ids in the order they joined; then u32
+// count of keyframes with measured planes, each i64 keyframe id, u32 count and per measurement
+// n_c (3 doubles, unit), d_c, u64 inliers, i64 map plane id or -1; since version 4).
 // Records are sorted by id and maps by key, so save -> load -> save gives identical bytes.
 // Version 1 files (without LOOP) are read as maps without loop edges, version 2 files
-// (without DLNK) as maps without depth links; newer versions are rejected.
+// (without DLNK) as maps without depth links, version 3 files (without PLAN) as maps without
+// planes; newer versions are rejected.
 //
 // Reading validates before it builds: checksums, sizes, every id reference and index; any
 // problem is an InputError "FILE: what is wrong" and the target map is left untouched.
@@ -37,7 +43,7 @@ namespace builtscene::slam {
 
 class Map;
 
-inline constexpr std::uint32_t kMapFileVersion = 3;
+inline constexpr std::uint32_t kMapFileVersion = 4;
 
 struct MapFileInfo {
   std::uint32_t version = 0;

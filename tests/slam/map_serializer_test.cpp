@@ -16,6 +16,7 @@
 #include "core/errors.hpp"
 #include "map_test_fixture.hpp"
 #include "slam/map_serializer.hpp"
+#include "slam/plane_landmark.hpp"
 
 namespace builtscene::slam {
 namespace {
@@ -333,15 +334,16 @@ TEST(MapSerializer, OdometryTreeLinksRoundTrip) {
 }
 
 // Older files are the same map without what their version lacked: version 1 had no LOOP
-// section (loop edges), version 2 no DLNK section (depth links). Saved again, they are
-// today's version.
+// section (loop edges), version 2 no DLNK section (depth links), version 3 no PLAN section
+// (plane landmarks). Saved again, they are today's version.
 TEST(MapSerializer, OlderVersionsStillLoad) {
   Built a(6, 50);
   const auto sections = split_sections(a.bytes);
-  ASSERT_EQ(sections.size(), 6u);
+  ASSERT_EQ(sections.size(), 7u);
   ASSERT_EQ(sections[4].tag, "LOOP");
   ASSERT_EQ(sections[5].tag, "DLNK");
-  for (std::uint32_t version : {1u, 2u}) {
+  ASSERT_EQ(sections[6].tag, "PLAN");
+  for (std::uint32_t version : {1u, 2u, 3u}) {
     const auto old = join_sections(a.bytes, version, std::vector<Section>(sections.begin(), sections.begin() + 3 + version));
     Map loaded;
     ASSERT_EQ(decode_error(old, a.ctx, loaded), "") << "version " << version;
@@ -458,6 +460,123 @@ TEST(MapSerializer, BadDepthLinksAreRejected) {
   std::lock_guard lock(target.mutex());
   EXPECT_EQ(target.keyframe_count(), 6u);
   EXPECT_EQ(target.keyframes()[4]->depth_link_to.lock()->id, 3);
+}
+
+// Plane landmarks (version 4): map planes with their observers, and each keyframe's measured
+// planes with the map plane each joined, come back exactly; observers not in the map and
+// measurements of a plane not in the map are not written; saving again gives the same bytes.
+// A map extended after loading keeps numbering planes after the saved ones.
+TEST(MapSerializer, PlaneLandmarksRoundTrip) {
+  Built a(8, 60);
+  {
+    std::lock_guard lock(a.map.mutex());
+    const auto kfs = a.map.keyframes();
+    std::mt19937 rng(11);
+    std::normal_distribution<double> g;
+    for (int p = 0; p < 3; ++p) {
+      auto pl = std::make_shared<MapPlane>();
+      pl->id = a.map.next_plane_id();
+      pl->n_w = Eigen::Vector3d(g(rng), g(rng), g(rng)).normalized();
+      pl->d_w = g(rng);
+      pl->last_seen_from = Eigen::Vector3d(g(rng), g(rng), g(rng));
+      a.map.add_plane(pl);
+    }
+    const auto planes = a.map.planes();
+    auto measure = [&](std::size_t k, const std::shared_ptr<MapPlane>& pl) {
+      PlaneMeasurement m{Eigen::Vector3d(g(rng), g(rng), g(rng)).normalized(), g(rng), static_cast<std::size_t>(600 + k)};
+      kfs[k]->planes.push_back({m, pl});
+      if (pl) pl->observers.push_back(kfs[k]);
+    };
+    measure(1, planes[0]);
+    measure(1, planes[1]);
+    measure(3, planes[0]);
+    measure(6, planes[2]);
+    measure(6, nullptr);  // measured, not associated
+    // An observer culled from the map, and a measurement of a plane merged away (not in the map).
+    planes[2]->observers.push_back(std::make_shared<KeyFrame>(99, Frame(99, 9.9, kfs[0]->f)));
+    kfs[7]->planes.push_back({PlaneMeasurement{Eigen::Vector3d::UnitX(), 0.5, 700}, std::make_shared<MapPlane>()});
+    a.bytes = encode_map(a.map, *a.ctx, 0);
+  }
+  Map loaded;
+  std::lock_guard la(a.map.mutex());
+  std::lock_guard lb(loaded.mutex());
+  decode_map(a.bytes.data(), a.bytes.size(), "mem", loaded, a.ctx);
+  const auto built = a.map.planes(), got = loaded.planes();
+  ASSERT_EQ(got.size(), 3u);
+  for (std::size_t p = 0; p < 3; ++p) {
+    EXPECT_EQ(got[p]->id, built[p]->id);
+    EXPECT_EQ(got[p]->n_w, built[p]->n_w);
+    EXPECT_EQ(got[p]->d_w, built[p]->d_w);
+    EXPECT_EQ(got[p]->last_seen_from, built[p]->last_seen_from);
+  }
+  auto observer_ids = [](const MapPlane& pl) {
+    std::vector<long> ids;
+    for (const auto& o : pl.observers) ids.push_back(o.lock()->id);
+    return ids;
+  };
+  EXPECT_EQ(observer_ids(*got[0]), (std::vector<long>{1, 3}));
+  EXPECT_EQ(observer_ids(*got[1]), (std::vector<long>{1}));
+  EXPECT_EQ(observer_ids(*got[2]), (std::vector<long>{6}));  // the culled keyframe 99 is not saved
+  const auto kb = loaded.keyframes(), ka = a.map.keyframes();
+  for (std::size_t k = 0; k < kb.size(); ++k) {
+    ASSERT_EQ(kb[k]->planes.size(), ka[k]->planes.size()) << "keyframe " << k;
+    for (std::size_t j = 0; j < kb[k]->planes.size(); ++j) {
+      const auto &x = ka[k]->planes[j], &y = kb[k]->planes[j];
+      EXPECT_EQ(y.m.n_c, x.m.n_c);
+      EXPECT_EQ(y.m.d_c, x.m.d_c);
+      EXPECT_EQ(y.m.inliers, x.m.inliers);
+      const bool saved_plane = x.landmark && std::count(built.begin(), built.end(), x.landmark);
+      EXPECT_EQ(y.landmark ? y.landmark->id : -1, saved_plane ? x.landmark->id : -1) << "keyframe " << k;
+      if (y.landmark) {
+        EXPECT_EQ(y.landmark, got[static_cast<std::size_t>(y.landmark->id)]);  // the loaded map's own plane
+      }
+    }
+  }
+  EXPECT_EQ(loaded.peek_next_plane_id(), 3);
+  // Saved again: the merged-away plane's measurement is now unassociated, as it was written.
+  EXPECT_EQ(encode_map(loaded, *a.ctx, 0), a.bytes);
+}
+
+TEST(MapSerializer, BadPlaneLandmarksAreRejected) {
+  Built a(6, 50);
+  // One plane (id 0, observed by keyframe `observer`) and keyframe 2 measuring plane `measured`.
+  auto with_planes = [&](std::int64_t next_id, std::int64_t id, int copies, double nx, std::int64_t observer,
+                         std::int64_t measured) {
+    auto sections = split_sections(a.bytes);
+    auto& payload = sections[6].payload;
+    payload.clear();
+    append(payload, next_id);
+    append(payload, static_cast<std::uint32_t>(copies));
+    for (int c = 0; c < copies; ++c) {
+      append(payload, id);
+      for (double v : {nx, 0.0, 0.0, 0.7, 0.1, 0.2, 0.3}) append(payload, v);
+      append(payload, static_cast<std::uint32_t>(1));
+      append(payload, observer);
+    }
+    append(payload, static_cast<std::uint32_t>(1));
+    append(payload, static_cast<std::int64_t>(2));
+    append(payload, static_cast<std::uint32_t>(1));
+    for (double v : {0.0, 1.0, 0.0, 1.2}) append(payload, v);
+    append(payload, static_cast<std::uint64_t>(900));
+    append(payload, measured);
+    return join_sections(a.bytes, kMapFileVersion, sections);
+  };
+  Map target;
+  EXPECT_EQ(decode_error(with_planes(1, 0, 1, 1.0, 2, 0), a.ctx, target), "");
+  EXPECT_NE(decode_error(with_planes(1, 0, 2, 1.0, 2, 0), a.ctx, target).find("plane 0 appears twice"), std::string::npos);
+  EXPECT_NE(decode_error(with_planes(1, 1, 1, 1.0, 2, 1), a.ctx, target).find("outside 0 to the next plane id"),
+            std::string::npos);
+  EXPECT_NE(decode_error(with_planes(1, 0, 1, 2.0, 2, 0), a.ctx, target).find("not a unit vector"), std::string::npos);
+  EXPECT_NE(decode_error(with_planes(1, 0, 1, 1.0, 42, 0), a.ctx, target).find("unknown id 42"), std::string::npos);
+  EXPECT_NE(decode_error(with_planes(1, 0, 1, 1.0, 2, 5), a.ctx, target).find("unknown id 5"), std::string::npos);
+  const std::string nan = decode_error(with_planes(1, 0, 1, std::nan(""), 2, 0), a.ctx, target);
+  EXPECT_NE(nan.find("PLAN"), std::string::npos) << nan;
+  EXPECT_NE(nan.find("test.map"), std::string::npos) << nan;
+  // The rejected files left the target map alone: it holds the one good file's map.
+  std::lock_guard lock(target.mutex());
+  ASSERT_EQ(target.planes().size(), 1u);
+  EXPECT_EQ(target.planes()[0]->observers.size(), 1u);
+  EXPECT_EQ(target.keyframes()[2]->planes.at(0).landmark, target.planes()[0]);
 }
 
 }  // namespace
