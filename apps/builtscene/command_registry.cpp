@@ -7,6 +7,7 @@
 
 #include "core/errors.hpp"
 #include "core/logging.hpp"
+#include "slam/solver_logging.hpp"
 
 #ifndef BUILTSCENE_VERSION
 #define BUILTSCENE_VERSION "0.0.0"
@@ -96,6 +97,7 @@ int run_cli(int argc, char** argv) {
   }
 
   init_logging(verbosity);
+  slam::init_solver_logging(argc > 0 ? argv[0] : "builtscene", verbosity);
   for (auto& leaf : leaves) {
     if (!leaf->cmd->parsed()) continue;
     try {
