@@ -241,6 +241,7 @@ nlohmann::json run_slam(const SlamOptions& opt) {
         {"rejected_anchored", lc.rejected_anchored},
         {"rejected_implausible", lc.rejected_implausible},
         {"points_fused", lc.points_fused},
+        {"planes_merged", lc.planes_merged},
         {"global_ba_runs", lc.global_ba_runs},
         {"global_ba_aborted", lc.global_ba_aborted},
         {"global_ba_merged", lc.global_ba_merged},

@@ -448,6 +448,7 @@ void LoopCloser::correct(const std::shared_ptr<KeyFrame>& kf, const LoopMatch& m
     std::lock_guard s(stats_mutex_);
     if (closed) ++stats_.loops;
     stats_.points_fused += fused;
+    stats_.planes_merged += planes_merged;
   }
   if (!closed) return;
   emit(event);
@@ -464,6 +465,7 @@ void LoopCloser::run_global_ba(long loop, long keyframe, long matched) {
   std::vector<std::shared_ptr<KeyFrame>> cams;
   std::vector<std::shared_ptr<MapPoint>> pts;
   std::vector<std::shared_ptr<MapPlane>> planes;
+  int gba_planes_merged = 0;
   {
     std::lock_guard lock(map_.mutex());
     const auto all = map_.keyframes();
@@ -566,7 +568,7 @@ void LoopCloser::run_global_ba(long loop, long keyframe, long matched) {
       p->update_normal_and_depth();
     }
     store_solved_planes(planes, r.planes);
-    if (opt_.planes.enabled) refit_and_merge_planes(map_, opt_.planes, /*refit=*/false);
+    if (opt_.planes.enabled) gba_planes_merged = refit_and_merge_planes(map_, opt_.planes, /*refit=*/false);
     event.stage = LoopEvent::Stage::kGlobalBundleAdjustment;
     event.loop = loop;
     event.keyframe = keyframe;
@@ -582,6 +584,7 @@ void LoopCloser::run_global_ba(long loop, long keyframe, long matched) {
   {
     std::lock_guard s(stats_mutex_);
     ++stats_.global_ba_merged;
+    stats_.planes_merged += gba_planes_merged;
   }
   add_time("global_ba", start);
   spdlog::info("global BA after loop {} merged: {} keyframes, {} points, RMS {:.2f} -> {:.2f} px", loop, cams.size(),

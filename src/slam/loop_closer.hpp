@@ -125,6 +125,7 @@ class LoopCloser {
     long rejected_implausible = 0;   // ... of which verified, but larger than the path could drift
     long loops = 0;
     long points_fused = 0;
+    long planes_merged = 0;  // plane landmarks joined after corrections (refit_and_merge_planes)
     long global_ba_runs = 0, global_ba_aborted = 0, global_ba_merged = 0;
     // The most connected parts any loop's essential graph fell into: 1 when every keyframe is
     // tied to the rest (a part no edge joins would move rigidly and leave a step).
