@@ -202,13 +202,28 @@ std::shared_ptr<KeyFrame> keyframe_seeing(Map& map, const Eigen::Vector3d& c, co
   return kf;
 }
 
+// World planes of the association tests (keyframes look along +z): the corridor's walls and
+// floor, and a cabinet 10 cm in front of the left wall (not the wall).
+const TruePlane kLeftWall{{1, 0, 0}, 0.7}, kRightWall{{-1, 0, 0}, 1.3}, kFloor{{0, -1, 0}, 1.0};
+const TruePlane kCabinet{{1, 0, 0}, 0.6};
+
+// n keyframes 0.5 m apart down the corridor, each seeing `wall` and associated in turn.
+std::vector<std::shared_ptr<KeyFrame>> keyframes_along(Map& map, const PlaneLandmarkOptions& opt, const TruePlane& wall,
+                                                       int n) {
+  std::vector<std::shared_ptr<KeyFrame>> kfs;
+  for (int i = 0; i < n; ++i) {
+    kfs.push_back(keyframe_seeing(map, {0, 0, 0.5 * i}, {wall}));
+    associate_planes(*kfs.back(), map, opt);
+  }
+  return kfs;
+}
+
 TEST(PlaneLandmark, AssociationJoinsOneWallAcrossKeyframesAndKeepsOthersApart) {
   Map map;
   std::lock_guard lock(map.mutex());
   PlaneLandmarkOptions opt;
   opt.enabled = true;
-  const TruePlane left{{1, 0, 0}, 0.7}, right{{-1, 0, 0}, 1.3}, floor{{0, -1, 0}, 1.0};
-  const TruePlane cabinet{{1, 0, 0}, 0.6};        // 10 cm in front of the left wall: not the wall
+  const TruePlane &left = kLeftWall, &right = kRightWall, &floor = kFloor, &cabinet = kCabinet;
   auto a = keyframe_seeing(map, {0, 0, 0}, {left, right, floor});
   auto b = keyframe_seeing(map, {0.02, 0.01, 2.0}, {left, floor, cabinet});
   auto far = keyframe_seeing(map, {0, 0, 20.0}, {left});  // the same plane, but 18 m from its last sighting
@@ -232,12 +247,8 @@ TEST(PlaneLandmark, BundleAdjustmentTermsComeWithAnchorsAndHoldLoneCamerasInPlac
   std::lock_guard lock(map.mutex());
   PlaneLandmarkOptions opt;
   opt.enabled = true;
-  const TruePlane left{{1, 0, 0}, 0.7};
-  std::vector<std::shared_ptr<KeyFrame>> kfs;
-  for (int i = 0; i < 12; ++i) {
-    kfs.push_back(keyframe_seeing(map, {0, 0, 0.5 * i}, {left}));
-    associate_planes(*kfs.back(), map, opt);
-  }
+  const TruePlane& left = kLeftWall;
+  const auto kfs = keyframes_along(map, opt, left, 12);
   // A local problem of the newest keyframe alone, with no point seen by a fixed camera: the
   // wall comes with opt.anchors older observers (fixed), and the keyframe is held in place.
   BundleAdjustmentProblem pb;
@@ -327,8 +338,7 @@ TEST(PlaneLandmark, ALoopCorrectionRefitsThePlanesAndJoinsEachWallsTwoLaps) {
   std::lock_guard lock(map.mutex());
   PlaneLandmarkOptions opt;
   opt.enabled = true;
-  const TruePlane left{{1, 0, 0}, 0.7}, right{{-1, 0, 0}, 1.3}, floor{{0, -1, 0}, 1.0};
-  const TruePlane cabinet{{1, 0, 0}, 0.6};  // 10 cm in front of the left wall, seen on lap 2 only
+  const TruePlane &left = kLeftWall, &right = kRightWall, &floor = kFloor, &cabinet = kCabinet;  // cabinet: lap 2 only
   const SE3 d1(so3_exp(Eigen::Vector3d(0, 1.0 * M_PI / 180, 0)), Eigen::Vector3d(0, 0.05, 0));
   const SE3 d2(Eigen::Quaterniond::Identity(), Eigen::Vector3d(0.3, 0.2, 0));
   std::vector<std::shared_ptr<KeyFrame>> lap1, lap2;
@@ -383,15 +393,10 @@ TEST(PlaneLandmark, MergingWithoutRefitTakesTheObserverWeightedMean) {
   std::lock_guard lock(map.mutex());
   PlaneLandmarkOptions opt;
   opt.enabled = true;
-  const TruePlane left{{1, 0, 0}, 0.7};
-  std::vector<std::shared_ptr<KeyFrame>> kfs;
-  for (int i = 0; i < 4; ++i) {
-    kfs.push_back(keyframe_seeing(map, {0, 0, 0.5 * i}, {left}));
-    associate_planes(*kfs.back(), map, opt);
-  }
+  keyframes_along(map, opt, kLeftWall, 4);
   ASSERT_EQ(map.planes().size(), 1u);
   // A second plane of the same wall (as a drifted lap would have made), observed by one keyframe.
-  auto extra = keyframe_seeing(map, {0, 0, 1.0}, {left});
+  auto extra = keyframe_seeing(map, {0, 0, 1.0}, {kLeftWall});
   auto second = std::make_shared<MapPlane>();
   second->id = map.next_plane_id();
   second->n_w = Eigen::Vector3d(1, 0, 0);
