@@ -222,9 +222,8 @@ std::optional<double> Tracker::recent_turn_rate() const {
   return so3_log(d.rotation()).norm() / static_cast<double>(recent_poses_.size() - 1);
 }
 
-SE3 Tracker::odometry_prediction(bool* held) const {
-  if (held) *held = false;
-  if (!has_velocity_) return SE3();
+Tracker::OdometryPrediction Tracker::odometry_prediction() const {
+  if (!has_velocity_) return {};
   // On a depth-odometry bridge (the last frame was carried by it) the prediction is the last
   // feature-tracked frame's motion, not the last frame's: along a plain corridor the depth
   // leaves the slide free and returns the prediction plus noise there, and feeding that back
@@ -248,9 +247,8 @@ SE3 Tracker::odometry_prediction(bool* held) const {
   const bool straight = so3_log(feature_velocity_.rotation()).norm() < kStraight &&
                         (turn ? *turn < kStraight && last_turn < kTurning : last_turn < kStraight);
   const bool hold = last_by_depth_ && has_feature_velocity_ && straight;
-  if (held) *held = hold;
   const SE3& v = hold ? feature_velocity_ : velocity_;
-  if (recent_speeds_.size() < 5) return v;
+  if (recent_speeds_.size() < 5) return {v, hold};
   // Its speed is the median of the last 30 feature-tracked frames (and bridge frames whose
   // depth measured the slide, see track()): held at it on the bridge,
   // capped at it otherwise. The depth odometry keeps the prediction where one plane leaves a
@@ -261,8 +259,8 @@ SE3 Tracker::odometry_prediction(bool* held) const {
   std::nth_element(s.begin(), s.begin() + static_cast<long>(s.size() / 2), s.end());
   const double median = s[s.size() / 2];
   const double speed = v.translation().norm();
-  if ((speed <= median && !hold) || !(speed > 1e-9)) return v;
-  return SE3(v.rotation(), v.translation() * (median / speed));
+  if ((speed <= median && !hold) || !(speed > 1e-9)) return {v, hold};
+  return {SE3(v.rotation(), v.translation() * (median / speed)), hold};
 }
 
 long Tracker::depth_odometry_prior_frames() const {
@@ -276,9 +274,9 @@ bool Tracker::track_depth_odometry() {
     depth_odometry_ = std::make_unique<DepthOdometry>(K.fx, K.fy, K.cx, K.cy);
   }
   const auto start = std::chrono::steady_clock::now();
-  bool held = false;
-  const SE3 prediction = odometry_prediction(&held);
-  const auto T_cur_last = depth_odometry_->align(last_gray_, last_depth_, gray_, depth_, prediction, held);
+  const auto prediction = odometry_prediction();
+  const auto T_cur_last =
+      depth_odometry_->align(last_gray_, last_depth_, gray_, depth_, prediction.T_cur_last, prediction.held);
   if (timer_) timer_->add("depth_odometry", ms_since(start));
   if (!T_cur_last) return false;
   current_.clear_matches();

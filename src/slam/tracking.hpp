@@ -193,7 +193,11 @@ class Tracker {
   std::optional<double> recent_turn_rate() const;
   // The motion the depth odometry starts from and is pulled towards; `held`: it is the held
   // feature-tracked speed of a straight drive (see the definition).
-  SE3 odometry_prediction(bool* held = nullptr) const;
+  struct OdometryPrediction {
+    SE3 T_cur_last;
+    bool held = false;
+  };
+  OdometryPrediction odometry_prediction() const;
   // No motion to extrapolate (start, loss, new map): the velocities and the bridge flag.
   void forget_motion();
   std::shared_ptr<KeyFrame> reference_;
