@@ -723,6 +723,7 @@ MapFileInfo decode_map(const std::uint8_t* data, std::size_t size, const std::st
   if (version >= 4) {
     Reader plr(spans[6].data, spans[6].size, name, "PLAN");
     next_plane_id = plr.get<std::int64_t>("next plane id");
+    if (next_plane_id < 0) plr.fail(fmt::format("next plane id {} is negative", next_plane_id));
     const std::size_t n_planes = plr.count(kMapPlaneBytes, "plane count");
     std::unordered_map<long, std::shared_ptr<MapPlane>> plane_by_id;
     auto unit = [&](Reader& r, const char* what, const std::string& whose) {

@@ -567,6 +567,8 @@ TEST(MapSerializer, BadPlaneLandmarksAreRejected) {
   EXPECT_NE(decode_error(with_planes(1, 1, 1, 1.0, 2, 1), a.ctx, target).find("outside 0 to the next plane id"),
             std::string::npos);
   EXPECT_NE(decode_error(with_planes(1, 0, 1, 2.0, 2, 0), a.ctx, target).find("not a unit vector"), std::string::npos);
+  EXPECT_NE(decode_error(with_planes(-1, 0, 0, 1.0, 2, -1), a.ctx, target).find("next plane id -1 is negative"),
+            std::string::npos);
   EXPECT_NE(decode_error(with_planes(1, 0, 1, 1.0, 42, 0), a.ctx, target).find("unknown id 42"), std::string::npos);
   EXPECT_NE(decode_error(with_planes(1, 0, 1, 1.0, 2, 5), a.ctx, target).find("unknown id 5"), std::string::npos);
   const std::string nan = decode_error(with_planes(1, 0, 1, std::nan(""), 2, 0), a.ctx, target);
