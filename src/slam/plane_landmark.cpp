@@ -19,6 +19,32 @@ PlaneMeasurement plane_in_world(const PlaneMeasurement& m_c, const SE3& T_cw) {
   return w;
 }
 
+namespace {
+
+// The inlier-weighted mean of camera-frame plane measurements moved into the world: where bundle
+// adjustment starts a map plane (add_plane_terms) and where a loop correction re-fits it.
+class PlaneMean {
+ public:
+  void add(const PlaneMeasurement& m_c, const SE3& T_cw) {
+    const PlaneMeasurement w = plane_in_world(m_c, T_cw);
+    const double wt = static_cast<double>(std::max<std::size_t>(m_c.inliers, 1));
+    n_ += wt * w.n_c;
+    d_ += wt * w.d_c;
+    w_ += wt;
+  }
+  bool empty() const { return w_ <= 0 || n_.norm() <= 0; }
+  Eigen::Vector3d normal_or(const Eigen::Vector3d& fallback) const {
+    return n_.norm() > 0 ? Eigen::Vector3d(n_.normalized()) : fallback;
+  }
+  double offset_or(double fallback) const { return w_ > 0 ? d_ / w_ : fallback; }
+
+ private:
+  Eigen::Vector3d n_ = Eigen::Vector3d::Zero();
+  double d_ = 0, w_ = 0;
+};
+
+}  // namespace
+
 void associate_planes(KeyFrame& kf, Map& map, const PlaneLandmarkOptions& opt) {
   const double cos_match = std::cos(opt.match_deg * M_PI / 180.0);
   const Eigen::Vector3d centre = kf.camera_center();
@@ -124,20 +150,11 @@ std::vector<std::shared_ptr<MapPlane>> add_plane_terms(std::vector<std::shared_p
     }
   }
   // Each plane starts at the inlier-weighted mean of its measurements.
-  std::vector<Eigen::Vector3d> n_sum(planes.size(), Eigen::Vector3d::Zero());
-  std::vector<double> d_sum(planes.size(), 0), w_sum(planes.size(), 0);
-  for (const auto& pm : pb.plane_measurements) {
-    const auto j = static_cast<std::size_t>(pm.plane);
-    const PlaneMeasurement w = plane_in_world(pm.m, pb.cameras[static_cast<std::size_t>(pm.camera)].T_cw);
-    const double wt = static_cast<double>(std::max<std::size_t>(pm.m.inliers, 1));
-    n_sum[j] += wt * w.n_c;
-    d_sum[j] += wt * w.d_c;
-    w_sum[j] += wt;
-  }
-  for (std::size_t j = 0; j < planes.size(); ++j) {
-    const Eigen::Vector3d n = n_sum[j].norm() > 0 ? Eigen::Vector3d(n_sum[j].normalized()) : planes[j]->n_w;
-    pb.planes.push_back({n, w_sum[j] > 0 ? d_sum[j] / w_sum[j] : planes[j]->d_w});
-  }
+  std::vector<PlaneMean> means(planes.size());
+  for (const auto& pm : pb.plane_measurements)
+    means[static_cast<std::size_t>(pm.plane)].add(pm.m, pb.cameras[static_cast<std::size_t>(pm.camera)].T_cw);
+  for (std::size_t j = 0; j < planes.size(); ++j)
+    pb.planes.push_back({means[j].normal_or(planes[j]->n_w), means[j].offset_or(planes[j]->d_w)});
   return planes;
 }
 
@@ -156,23 +173,16 @@ std::vector<std::shared_ptr<KeyFrame>> live_observers(MapPlane& plane) {
 // The inlier-weighted mean of the plane's measurements by its observers at their poses; false
 // when none of them measures it any more.
 bool refit_plane(MapPlane& plane) {
-  Eigen::Vector3d n = Eigen::Vector3d::Zero();
-  double d = 0, w = 0;
+  PlaneMean mean;
   const auto observers = live_observers(plane);
   for (const auto& k : observers)
-    for (const auto& kp : k->planes) {
-      if (kp.landmark.get() != &plane) continue;
-      const PlaneMeasurement m = plane_in_world(kp.m, k->pose());
-      const double wt = static_cast<double>(std::max<std::size_t>(kp.m.inliers, 1));
-      n += wt * m.n_c;
-      d += wt * m.d_c;
-      w += wt;
-    }
+    for (const auto& kp : k->planes)
+      if (kp.landmark.get() == &plane) mean.add(kp.m, k->pose());
   if (observers.empty()) return false;
   plane.last_seen_from = observers.back()->camera_center();
-  if (w <= 0 || n.norm() <= 0) return false;
-  plane.n_w = n.normalized();
-  plane.d_w = d / w;
+  if (mean.empty()) return false;
+  plane.n_w = mean.normal_or(plane.n_w);
+  plane.d_w = mean.offset_or(plane.d_w);
   return true;
 }
 
