@@ -13,6 +13,7 @@
 #include "slam/map.hpp"
 #include "slam/plane_landmark.hpp"
 #include "map_test_fixture.hpp"
+#include "plane_depth_render.hpp"
 #include "synthetic_scene.hpp"
 
 namespace builtscene::slam {
@@ -36,18 +37,17 @@ std::vector<TruePlane> corridor_planes() {
           {{0, 0, -1}, 6.0}};    // end wall z = 6
 }
 
-cv::Mat ray_cast(const PinholeCamera& cam, const std::vector<TruePlane>& planes, double sigma, unsigned seed) {
+// The planes' depth seen from the origin (test::render_planes, the camera of kinect_camera()),
+// with Gaussian noise of sigma on every pixel that hits a plane.
+cv::Mat ray_cast(const std::vector<TruePlane>& planes, double sigma, unsigned seed) {
+  std::vector<test::Plane> as_render;  // n.X + d = 0 is n.X = -d
+  for (const auto& p : planes) as_render.push_back({p.n, -p.d});
+  cv::Mat depth = test::render_planes(as_render, SE3());
   std::mt19937 rng(seed);
   std::normal_distribution<double> noise(0.0, sigma);
-  cv::Mat depth(cam.height, cam.width, CV_32F, cv::Scalar(0));
-  for (int v = 0; v < cam.height; ++v)
-    for (int u = 0; u < cam.width; ++u) {
-      const Eigen::Vector3d ray((u - cam.cx) / cam.fx, (v - cam.cy) / cam.fy, 1.0);
-      double s = 1e9;
-      for (const auto& p : planes)
-        if (const double nr = p.n.dot(ray); nr < 0) s = std::min(s, p.d / -nr);  // n.(s ray) + d = 0
-      if (s < 1e8) depth.at<float>(v, u) = static_cast<float>(s + noise(rng));
-    }
+  for (int v = 0; v < depth.rows; ++v)
+    for (int u = 0; u < depth.cols; ++u)
+      if (float& z = depth.at<float>(v, u); z > 0) z = static_cast<float>(z + noise(rng));
   return depth;
 }
 
@@ -58,7 +58,7 @@ double angle_between_deg(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
 TEST(DepthPlanes, FindsTheCorridorsFloorWallsAndCeilingUnderNoise) {
   const PinholeCamera cam = kinect_camera();
   const auto truth = corridor_planes();
-  const cv::Mat depth = ray_cast(cam, truth, 0.005, 3);
+  const cv::Mat depth = ray_cast(truth, 0.005, 3);
   const auto found = extract_depth_planes(depth, cam.fx, cam.fy, cam.cx, cam.cy);
   // The ceiling (1.6 m above: in view only beyond 3.5 m) and the end wall at 6 m lie beyond
   // max_depth (4 m); the floor and both walls are found, each once.
