@@ -55,7 +55,7 @@ nlohmann::json run_drift(const DriftOptions& o) {
     std::vector<cv::KeyPoint> kps;
     orb.extract(gray, kps, binary);
     if (kps.empty()) continue;
-    const cv::Mat patches = normalize_saft_patches(sample_saft_patches(orb.levels(), orb.pyramid().inv_scale, kps));
+    const cv::Mat patches = normalize_saft_patches(sample_saft_patches(orb.levels(), orb.pyramid(), kps));
     a.describe(patches, da);
     b.describe(patches, db);
     for (int r = 0; r < patches.rows; ++r) {

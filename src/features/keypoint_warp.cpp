@@ -26,10 +26,10 @@ std::optional<cv::KeyPoint> warp_keypoint(const cv::Matx33d& h, const cv::KeyPoi
   // Seen s times larger in image 2, the same structure is found log_f(s) levels higher.
   const int level = kp.octave + static_cast<int>(std::lround(std::log(s) / std::log(static_cast<double>(pyramid.scale_factor))));
   if (level < 0 || level >= pyramid.levels()) return std::nullopt;
-  const double inv = pyramid.inv_scale[static_cast<std::size_t>(level)];
-  const int lw = static_cast<int>(std::lround(size2.width * inv)), lh = static_cast<int>(std::lround(size2.height * inv));
-  const int x = static_cast<int>(std::lround(q.x * inv)), y = static_cast<int>(std::lround(q.y * inv));
-  if (x < border || y < border || x >= lw - border || y >= lh - border) return std::nullopt;
+  const cv::Size ls = pyramid.level_size(size2, level);
+  const cv::Point2f at_level = pyramid.to_level(cv::Point2f(static_cast<float>(q.x), static_cast<float>(q.y)), level, size2);
+  const int x = cvRound(at_level.x), y = cvRound(at_level.y);
+  if (x < border || y < border || x >= ls.width - border || y >= ls.height - border) return std::nullopt;
   cv::KeyPoint out = kp;
   out.pt = cv::Point2f(static_cast<float>(q.x), static_cast<float>(q.y));
   out.octave = level;

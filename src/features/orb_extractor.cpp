@@ -68,6 +68,23 @@ ScalePyramid ScalePyramid::make(float scale_factor, int n_levels) {
   return p;
 }
 
+cv::Size ScalePyramid::level_size(cv::Size image, int l) const {
+  const float inv = inv_scale[static_cast<std::size_t>(l)];
+  return {static_cast<int>(std::lround(image.width * inv)), static_cast<int>(std::lround(image.height * inv))};
+}
+
+cv::Point2f ScalePyramid::to_image(cv::Point2f at_level, int l, cv::Size image) const {
+  const cv::Size s = level_size(image, l);
+  return {static_cast<float>((at_level.x + 0.5) * image.width / s.width - 0.5),
+          static_cast<float>((at_level.y + 0.5) * image.height / s.height - 0.5)};
+}
+
+cv::Point2f ScalePyramid::to_level(cv::Point2f in_image, int l, cv::Size image) const {
+  const cv::Size s = level_size(image, l);
+  return {static_cast<float>((in_image.x + 0.5) * s.width / image.width - 0.5),
+          static_cast<float>((in_image.y + 0.5) * s.height / image.height - 0.5)};
+}
+
 OrbExtractor::OrbExtractor(OrbExtractorOptions options) : options_(options) {
   options_.validate();
   pyramid_ = ScalePyramid::make(options_.scale_factor, options_.n_levels);
@@ -99,8 +116,7 @@ void OrbExtractor::build_pyramid(const cv::Mat& gray) {
   levels_.resize(static_cast<std::size_t>(options_.n_levels));
   levels_[0] = gray;
   for (int l = 1; l < options_.n_levels; ++l) {
-    const float inv = pyramid_.inv_scale[static_cast<std::size_t>(l)];
-    const cv::Size sz(static_cast<int>(std::lround(gray.cols * inv)), static_cast<int>(std::lround(gray.rows * inv)));
+    const cv::Size sz = pyramid_.level_size(gray.size(), l);
     if (sz.width <= 2 * kBorder || sz.height <= 2 * kBorder) {
       levels_[static_cast<std::size_t>(l)] = cv::Mat();
       continue;
@@ -230,7 +246,7 @@ void OrbExtractor::describe_level(int l, std::vector<cv::KeyPoint>& kps, cv::Mat
     }
     k.octave = l;
     k.size = 2.0f * kOrbPatchRadius * scale;
-    k.pt *= scale;
+    k.pt = pyramid_.to_image(k.pt, l, levels_[0].size());
   }
 }
 
@@ -298,7 +314,7 @@ void OrbExtractor::describe(const cv::Mat& gray, std::vector<cv::KeyPoint>& keyp
     const auto l = static_cast<std::size_t>(k.octave);
     const cv::Mat& img = levels_[l];
     cv::KeyPoint at_level = k;
-    at_level.pt *= pyramid_.inv_scale[l];
+    at_level.pt = pyramid_.to_level(k.pt, k.octave, levels_[0].size());
     // Rounded like describe_level does, so the check covers the pixels it will read.
     const int x = cvRound(at_level.pt.x), y = cvRound(at_level.pt.y);
     if (img.empty() || x < kBorder || y < kBorder || x >= img.cols - kBorder || y >= img.rows - kBorder)

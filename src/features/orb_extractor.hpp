@@ -62,6 +62,16 @@ struct ScalePyramid {
   std::vector<float> inv_sigma2;
   static ScalePyramid make(float scale_factor, int n_levels);
   int levels() const { return static_cast<int>(scale.size()); }
+
+  // Size of level l of an image of size `image`, as OrbExtractor builds it.
+  cv::Size level_size(cv::Size image, int l) const;
+  // Pixel coordinates between level l and the image it was made from (level 0). Each level is
+  // resized from the one before (cv::resize keeps pixel centres in place), so per axis
+  // x0 + 0.5 = (xl + 0.5) * W0 / Wl with the level's rounded size Wl. Multiplying by scale[l],
+  // as ORB-SLAM does, puts a level-7 keypoint of a 640 x 480 image up to 1.3 px up and to the
+  // left of where it was found (docs/slam.md, "Keypoint coordinates on coarse levels").
+  cv::Point2f to_image(cv::Point2f at_level, int l, cv::Size image) const;
+  cv::Point2f to_level(cv::Point2f in_image, int l, cv::Size image) const;
 };
 
 class OrbExtractor : public FeatureExtractor {

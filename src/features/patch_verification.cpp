@@ -42,7 +42,7 @@ struct Described {
 };
 
 void describe_saft(OrbExtractor& orb, SaftNetwork& net, Described& d) {
-  const cv::Mat patches = normalize_saft_patches(sample_saft_patches(orb.levels(), orb.pyramid().inv_scale, d.kps));
+  const cv::Mat patches = normalize_saft_patches(sample_saft_patches(orb.levels(), orb.pyramid(), d.kps));
   net.describe(patches, d.unit, &d.raw);
 }
 

@@ -15,7 +15,7 @@ void SaftExtractor::extract(const cv::Mat& gray, std::vector<cv::KeyPoint>& keyp
     patches_ = cv::Mat(0, kSaftPatchPixels, CV_8U);
     return;
   }
-  patches_ = sample_saft_patches(orb_.levels(), orb_.pyramid().inv_scale, keypoints);
+  patches_ = sample_saft_patches(orb_.levels(), orb_.pyramid(), keypoints);
   network_.describe(normalize_saft_patches(patches_), descriptors);
 }
 

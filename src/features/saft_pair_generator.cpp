@@ -93,7 +93,7 @@ SaftPairPool generate_saft_pairs(const std::vector<cv::Mat>& images, const SaftP
     cv::Mat desc;
     orb.extract(gray, kps, desc);
     if (kps.empty()) continue;
-    const cv::Mat patches1 = sample_saft_patches(orb.levels(), orb.pyramid().inv_scale, kps);
+    const cv::Mat patches1 = sample_saft_patches(orb.levels(), orb.pyramid(), kps);
     for (int wi = 0; wi < o.warps_per_image; ++wi) {
       const WarpedImage warped = random_warp(gray, o, rng);
       std::vector<cv::KeyPoint> mapped;
@@ -107,7 +107,7 @@ SaftPairPool generate_saft_pairs(const std::vector<cv::Mat>& images, const SaftP
       if (mapped.empty()) continue;
       cv::Mat d2;
       orb2.describe(warped.image, mapped, d2);  // sets the orientation seen in the warped image
-      const cv::Mat patches2 = sample_saft_patches(orb2.levels(), orb2.pyramid().inv_scale, mapped);
+      const cv::Mat patches2 = sample_saft_patches(orb2.levels(), orb2.pyramid(), mapped);
       for (std::size_t j = 0; j < mapped.size(); ++j) {
         firsts.push_back(patches1.row(index[j]));
         seconds.push_back(patches2.row(static_cast<int>(j)));

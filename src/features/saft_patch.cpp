@@ -6,7 +6,7 @@
 
 namespace builtscene {
 
-cv::Mat sample_saft_patches(const std::vector<cv::Mat>& levels, const std::vector<float>& inv_scale,
+cv::Mat sample_saft_patches(const std::vector<cv::Mat>& levels, const ScalePyramid& pyramid,
                             const std::vector<cv::KeyPoint>& keypoints) {
   cv::Mat out(static_cast<int>(keypoints.size()), kSaftPatchPixels, CV_8UC1);
   constexpr double half = 0.5 * (kSaftPatchSize - 1);
@@ -14,7 +14,8 @@ cv::Mat sample_saft_patches(const std::vector<cv::Mat>& levels, const std::vecto
     const cv::KeyPoint& k = keypoints[i];
     CV_Assert(k.octave >= 0 && static_cast<std::size_t>(k.octave) < levels.size());
     const auto l = static_cast<std::size_t>(k.octave);
-    const double cx = k.pt.x * inv_scale[l], cy = k.pt.y * inv_scale[l];
+    const cv::Point2f at_level = pyramid.to_level(k.pt, k.octave, levels[0].size());
+    const double cx = at_level.x, cy = at_level.y;
     const double a = k.angle * CV_PI / 180.0, c = std::cos(a), s = std::sin(a);
     // Patch pixel (u, v) reads the level at centre + R(angle) * (u - half, v - half): the
     // same rotation ORB applies to its BRIEF pattern.

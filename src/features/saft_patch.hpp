@@ -6,16 +6,18 @@
 
 #include <opencv2/core.hpp>
 
+#include "features/orb_extractor.hpp"
+
 namespace builtscene {
 
 constexpr int kSaftPatchSize = 32;
 constexpr int kSaftPatchPixels = kSaftPatchSize * kSaftPatchSize;
 
 // One 8-bit row of kSaftPatchPixels per keypoint. `levels` is the image pyramid the
-// keypoints refer to (level 0 = the image), `inv_scale[l]` maps level-0 pixels to level l;
-// keypoints carry pt (level-0 pixels), octave and angle (degrees) as OrbExtractor sets them.
-// Pixels outside the level replicate its border.
-cv::Mat sample_saft_patches(const std::vector<cv::Mat>& levels, const std::vector<float>& inv_scale,
+// keypoints refer to (level 0 = the image), made with `pyramid`, which maps level-0 pixels to
+// level l; keypoints carry pt (level-0 pixels), octave and angle (degrees) as OrbExtractor
+// sets them. Pixels outside the level replicate its border.
+cv::Mat sample_saft_patches(const std::vector<cv::Mat>& levels, const ScalePyramid& pyramid,
                             const std::vector<cv::KeyPoint>& keypoints);
 
 // The network's input: each row converted to float with zero mean and unit standard

@@ -1,5 +1,6 @@
 // ORB against a known image transformation: the second image is the first rotated and scaled
 // by a known similarity, so every correct match must land where the homography says.
+#include <cmath>
 #include <filesystem>
 
 #include <gtest/gtest.h>
@@ -107,6 +108,58 @@ TEST(OrbExtractor, RespectsBudgetAndLevels) {
     max_octave = std::max(max_octave, kp.octave);
   }
   EXPECT_EQ(max_octave, 7);
+}
+
+// Where a pixel of a coarse level lies in the image. Truth: Gaussian spots drawn at known
+// sub-pixel positions; on each level of the extractor's own pyramid, a spot's intensity
+// centroid, mapped back with to_image, must land on the drawn position. Plain multiplication
+// by the level's scale (ORB-SLAM's rule) misses by 0.5 (scale - 1) px per axis plus the
+// level's size rounding: 0.1 px on level 1, 1.3 px on level 7.
+TEST(OrbExtractor, CoarseLevelPixelsMapBackToWhereTheyWereFound) {
+  const int W = 640, H = 480;
+  const std::vector<cv::Point2d> spots = {{100.3, 90.7}, {320.0, 240.0}, {555.6, 123.4}, {211.1, 400.9}, {470.5, 350.25}};
+  const double sigma = 9.0;  // px; still several pixels wide on level 7
+  cv::Mat img(H, W, CV_8UC1);
+  for (int y = 0; y < H; ++y)
+    for (int x = 0; x < W; ++x) {
+      double v = 20;
+      for (const auto& c : spots) v += 220 * std::exp(-((x - c.x) * (x - c.x) + (y - c.y) * (y - c.y)) / (2 * sigma * sigma));
+      img.at<std::uint8_t>(y, x) = cv::saturate_cast<std::uint8_t>(v);
+    }
+  OrbExtractor orb;
+  std::vector<cv::KeyPoint> k;
+  cv::Mat d;
+  orb.extract(img, k, d);
+  const ScalePyramid& pyr = orb.pyramid();
+  ASSERT_EQ(orb.levels().size(), 8u);
+  double worst = 0, worst_plain = 0;
+  for (int l = 1; l < pyr.levels(); ++l) {
+    const cv::Mat& level = orb.levels()[static_cast<std::size_t>(l)];
+    ASSERT_EQ(level.size(), pyr.level_size(img.size(), l));
+    for (const auto& c : spots) {
+      const cv::Point2f guess = pyr.to_level(cv::Point2f(static_cast<float>(c.x), static_cast<float>(c.y)), l, img.size());
+      const double r = 2.5 * sigma * pyr.inv_scale[static_cast<std::size_t>(l)];
+      double sw = 0, sx = 0, sy = 0;
+      for (int y = static_cast<int>(guess.y - r); y <= static_cast<int>(guess.y + r) + 1; ++y)
+        for (int x = static_cast<int>(guess.x - r); x <= static_cast<int>(guess.x + r) + 1; ++x) {
+          if ((x - guess.x) * (x - guess.x) + (y - guess.y) * (y - guess.y) > r * r) continue;
+          const double w = level.at<std::uint8_t>(y, x) - 20.0;
+          sw += w;
+          sx += w * x;
+          sy += w * y;
+        }
+      const cv::Point2f centroid(static_cast<float>(sx / sw), static_cast<float>(sy / sw));
+      const cv::Point2f back = pyr.to_image(centroid, l, img.size());
+      worst = std::max(worst, std::hypot(back.x - c.x, back.y - c.y));
+      const float s = pyr.scale[static_cast<std::size_t>(l)];
+      worst_plain = std::max(worst_plain, std::hypot(centroid.x * s - c.x, centroid.y * s - c.y));
+      const cv::Point2f there = pyr.to_level(back, l, img.size());
+      EXPECT_NEAR(there.x, centroid.x, 1e-3);
+      EXPECT_NEAR(there.y, centroid.y, 1e-3);
+    }
+  }
+  EXPECT_LT(worst, 0.1) << "px, over levels 1-7";
+  EXPECT_GT(worst_plain, 1.0) << "px: the test must tell the two rules apart";
 }
 
 TEST(OrbExtractor, ParallelLevelsGiveIdenticalOutput) {

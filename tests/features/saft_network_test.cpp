@@ -97,7 +97,7 @@ TEST(SaftNetwork, UnitRowsBatchIndependentAndRoundTrip) {
   cv::Mat d;
   orb.extract(img, kps, d);
   ASSERT_GT(kps.size(), 150u);
-  const cv::Mat patches = normalize_saft_patches(sample_saft_patches(orb.levels(), orb.pyramid().inv_scale, kps));
+  const cv::Mat patches = normalize_saft_patches(sample_saft_patches(orb.levels(), orb.pyramid(), kps));
   SaftNetworkOptions small;
   small.batch_size = 16;
   SaftNetwork net(small, 3);

@@ -23,7 +23,7 @@ cv::Mat patches_of(const cv::Mat& img) {
   std::vector<cv::KeyPoint> kps;
   cv::Mat d;
   orb.extract(img, kps, d);
-  return sample_saft_patches(orb.levels(), orb.pyramid().inv_scale, kps);
+  return sample_saft_patches(orb.levels(), orb.pyramid(), kps);
 }
 
 TEST(SaftNetwork, WeightsHandOverGivesTheSameDescriptors) {
