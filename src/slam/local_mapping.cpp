@@ -1,5 +1,6 @@
 #include "slam/local_mapping.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 
@@ -316,7 +317,11 @@ void LocalMapping::triangulate_with_neighbours(KeyFrame& kf) {
       const Eigen::Vector3d r2 = T2.rotation().inverse() * Eigen::Vector3d(x2.x(), x2.y(), 1.0);
       const double cos_parallax = r1.dot(r2) / (r1.norm() * r2.norm());
       Eigen::Vector3d pw;
-      if (cos_parallax < 0.9998 && cos_parallax > 0) {
+      const double parallax_sigma = std::sqrt(pyr.sigma2[static_cast<std::size_t>(k1.octave)] +
+                                              pyr.sigma2[static_cast<std::size_t>(k2.octave)]) / K.fx;
+      const bool enough_parallax = cos_parallax < 0.9998 && cos_parallax > 0 &&
+                                   std::acos(std::min(1.0, cos_parallax)) >= opt_.min_parallax_sigmas * parallax_sigma;
+      if (enough_parallax) {
         if (!triangulate(x1, x2, T1, T2, pw)) continue;
       } else if (f1.has_depth(is)) {
         pw = T1.inverse() * f1.unproject(is);
