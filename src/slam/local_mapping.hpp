@@ -40,14 +40,14 @@ struct LocalMappingOptions {
   bool triangulation = true;
   // Two rays are triangulated only when their parallax is at least this many times its own
   // standard error, sqrt(sigma1^2 + sigma2^2) / f with sigma = 1 px x 1.2^level, besides
-  // ORB-SLAM's fixed 1.15 degrees (0 = that alone). Near 1.15 degrees two 1 px rays' parallax is
-  // uncertain by ~13 %, and the range, going as 1 / parallax, is biased: 1 % short on average on
-  // a grazing wall seen driving towards it (triangulation_test.cpp; the points selected because
-  // noise raised their parallax outweigh the 1 / parallax convexity). 12: 0.3-0.6 % there, and
-  // the corridor's west leg, 400 frames from a fresh start, overshoots by 1.2 % instead of 3.5 %
-  // (bench/west_leg.sh; docs/slam.md, "Triangulation only where the parallax is well above its
-  // noise"). 15 stalled one seed there.
-  double min_parallax_sigmas = 12.0;
+  // ORB-SLAM's fixed 1.15 degrees (0 = that alone, the default). Near 1.15 degrees two 1 px
+  // rays' parallax is uncertain by ~13 %, and the range, going as 1 / parallax, is biased: 1 %
+  // short on average on a grazing wall seen driving towards it, 0.3-0.6 % with 12
+  // (triangulation_test.cpp). Off by default: 12 took the corridor's west leg from a 3.5 % to a
+  // 1.2 % overshoot (bench/west_leg.sh), but starved whole corridor runs of points in other
+  // stretches, which then stalled (ATE 57 and 77 cm on seeds 1 and 4 against 7.2 and 6.6;
+  // docs/slam.md, "Triangulation only where the parallax is well above its noise").
+  double min_parallax_sigmas = 0.0;
   bool bundle_adjustment = true;
   // Local BA window: the new keyframe and its most covisible neighbours (ORB-SLAM takes all
   // covisible keyframes; with Ceres on two cores that makes BA seconds long on dense maps).

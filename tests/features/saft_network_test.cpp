@@ -25,6 +25,9 @@
 namespace builtscene {
 namespace {
 
+// The pyramid of a single image (level 0 only).
+const ScalePyramid kOneLevel = ScalePyramid::make(1.2f, 1);
+
 namespace fs = std::filesystem;
 
 fs::path temp_dir(const std::string& name) {
@@ -40,20 +43,20 @@ TEST(SaftPatch, RotatedKeypointSeesTheRotatedImage) {
   cv::rotate(img, rotated, cv::ROTATE_90_CLOCKWISE);
   cv::KeyPoint a(cv::Point2f(90, 70), 31, 0.0f, 0, 0);
   cv::KeyPoint b(cv::Point2f(160 - 1 - 70, 90), 31, 90.0f, 0, 0);
-  const cv::Mat pa = sample_saft_patches({img}, {1.0f}, {a});
-  const cv::Mat pb = sample_saft_patches({rotated}, {1.0f}, {b});
+  const cv::Mat pa = sample_saft_patches({img}, kOneLevel, {a});
+  const cv::Mat pb = sample_saft_patches({rotated}, kOneLevel, {b});
   double max_diff = 0;
   cv::minMaxLoc(cv::abs(cv::Mat_<int>(pa) - cv::Mat_<int>(pb)), nullptr, &max_diff);
   EXPECT_LE(max_diff, 1.0);
   // And the unrotated patch is the plain crop centred on the keypoint.
   const cv::Mat crop = img(cv::Rect(90 - 15, 70 - 15, 32, 32)).clone();
-  const cv::Mat shifted = sample_saft_patches({img}, {1.0f}, {cv::KeyPoint(cv::Point2f(90.5f, 70.5f), 31, 0.0f, 0, 0)});
+  const cv::Mat shifted = sample_saft_patches({img}, kOneLevel, {cv::KeyPoint(cv::Point2f(90.5f, 70.5f), 31, 0.0f, 0, 0)});
   EXPECT_EQ(cv::norm(crop.reshape(1, 1), shifted, cv::NORM_INF), 0.0);
 }
 
 TEST(SaftPatch, NormalizedRowsHaveZeroMeanUnitStd) {
   const cv::Mat img = test::textured_image(200, 160, 6);
-  const cv::Mat p = normalize_saft_patches(sample_saft_patches({img}, {1.0f}, {cv::KeyPoint(cv::Point2f(100, 80), 31, 33.0f, 0, 0)}));
+  const cv::Mat p = normalize_saft_patches(sample_saft_patches({img}, kOneLevel, {cv::KeyPoint(cv::Point2f(100, 80), 31, 33.0f, 0, 0)}));
   cv::Scalar mean, stddev;
   cv::meanStdDev(p, mean, stddev);
   EXPECT_NEAR(mean[0], 0.0, 1e-4);

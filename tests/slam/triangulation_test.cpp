@@ -122,8 +122,7 @@ TriangulatedWall triangulate_a_grazing_wall(double min_parallax_sigmas, int n, u
 // accepted because noise raised their parallax outweigh the 1 / parallax convexity).
 // Requiring the parallax to be many times its own error keeps the well-conditioned points.
 TEST(Triangulation, WellConditionedParallaxKeepsRangesNearlyUnbiased) {
-  const double k = LocalMappingOptions{}.min_parallax_sigmas;
-  ASSERT_GT(k, 0.0);
+  const double k = 12.0;  // off by default (local_mapping.hpp); the value docs/slam.md measured
   for (unsigned seed : {5u, 6u, 7u}) {
     const auto fixed_only = triangulate_a_grazing_wall(0.0, 3000, seed);
     const auto sigma_rule = triangulate_a_grazing_wall(k, 3000, seed);
