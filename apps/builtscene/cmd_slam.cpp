@@ -49,6 +49,7 @@ struct SlamOptions {
   int depth_prior_below = slam::TrackingOptions{}.depth_prior_below_inliers;
   int bridge_local_map = -1;  // --bridge-local-map
   int global_ba_iterations = slam::LoopClosingOptions{}.global_ba_iterations;
+  double min_parallax_sigmas = slam::LocalMappingOptions{}.min_parallax_sigmas;
   std::optional<double> planar_pitch_deg;  // --planar-motion
   SlamOgmOptions ogm;
   DescriptorOptions features;
@@ -76,7 +77,8 @@ nlohmann::json run_slam(const SlamOptions& opt) {
                                      std::pair{"--motion-prior-deg", opt.motion_prior_deg},
                                      std::pair{"--depth-link-weight", opt.depth_link_weight},
                                      std::pair{"--depth-plane-weight", opt.depth_plane_weight},
-                                     std::pair{"--depth-prior", opt.depth_prior}})
+                                     std::pair{"--depth-prior", opt.depth_prior},
+                                     std::pair{"--min-parallax-sigmas", opt.min_parallax_sigmas}})
     if (!std::isfinite(value)) throw InputError(std::string(flag) + ": not a number");
   slam::SystemOptions so;
   opt.features.apply(so);  // the descriptor flags, checked before the dataset is read
@@ -96,6 +98,7 @@ nlohmann::json run_slam(const SlamOptions& opt) {
   so.tracking.depth_prior_below_inliers = opt.depth_prior_below;
   so.tracking.bridge_local_map_inliers = opt.bridge_local_map;
   so.loop.global_ba_iterations = opt.global_ba_iterations;
+  so.mapping.min_parallax_sigmas = opt.min_parallax_sigmas;
   if (opt.planar_pitch_deg) so.planar = slam::PlanarMotion::from_pitch(*opt.planar_pitch_deg);
   if (opt.motion_prior_cm > 0) {
     so.tracking.motion_prior = true;
@@ -357,6 +360,12 @@ const bool registered_slam = register_command({
                      "two phases (robust, then after removing outliers)")
           ->capture_default_str()
           ->check(CLI::Range(1, 1000));
+      cmd.add_option("--min-parallax-sigmas", opt->min_parallax_sigmas,
+                     "Triangulate two rays only when their parallax is at least this many times its own standard "
+                     "error (0 = ORB-SLAM's 1.15 degrees alone; 12 removes a 1 % range bias but can starve "
+                     "weakly textured stretches; docs/slam.md)")
+          ->capture_default_str()
+          ->check(CLI::Range(0.0, 100.0));
       cmd.add_option("--depth-prior-below", opt->depth_prior_below,
                      "... only after a frame with fewer map inliers than this (0 = every frame)")
           ->capture_default_str()

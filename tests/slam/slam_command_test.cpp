@@ -136,6 +136,8 @@ TEST_F(SlamCommand, BadPriorAndLinkValuesAreUsageErrorsNamingTheFlag) {
                                    std::pair{" --depth-prior -0.5", "--depth-prior"},
                                    std::pair{" --depth-prior nan", "--depth-prior"},
                                    std::pair{" --depth-prior-below -3", "--depth-prior-below"},
+                                   std::pair{" --min-parallax-sigmas -1", "--min-parallax-sigmas"},
+                                   std::pair{" --min-parallax-sigmas nan", "--min-parallax-sigmas"},
                                    std::pair{" --descriptor saft --saft-handover-check", "--saft-handover-check"},
                                    std::pair{" --descriptor saft --saft-mode discrete --saft-handover-check",
                                              "--saft-handover-check"},
