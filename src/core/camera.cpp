@@ -70,12 +70,15 @@ RgbdCameraSettings load_camera_settings(const std::filesystem::path& path) {
   s.th_depth = f.get_double("ThDepth", 40.0);
   s.depth_map_factor = f.get_double("DepthMapFactor", 5000.0);
   s.disparity_sigma = f.get_double("DisparitySigma", s.disparity_sigma);
+  s.max_depth = f.get_double("MaxDepth", s.max_depth);
   if (c.fx <= 0 || c.fy <= 0) throw_input_error(path, 0, "Camera.fx and Camera.fy must be positive");
   if (c.width <= 0 || c.height <= 0) throw_input_error(path, 0, "Camera.width and Camera.height must be positive");
   if (s.depth_map_factor <= 0) throw_input_error(path, 0, "DepthMapFactor must be positive");
   if (s.fps <= 0) throw_input_error(path, 0, "Camera.fps must be positive");
   if (!(s.disparity_sigma >= 0) || !std::isfinite(s.disparity_sigma))
     throw_input_error(path, 0, "DisparitySigma must be a finite number >= 0 (pixels; 0 = ORB-SLAM's weighting)");
+  if (!(s.max_depth >= 0) || !std::isfinite(s.max_depth))
+    throw_input_error(path, 0, "MaxDepth must be a finite number >= 0 (metres; 0 = no limit)");
   return s;
 }
 

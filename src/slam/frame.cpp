@@ -16,6 +16,7 @@ std::shared_ptr<const FrameContext> FrameContext::make(const RgbdCameraSettings&
   c->bf = s.bf;
   c->th_depth = s.close_depth();
   c->disparity_sigma = s.disparity_sigma;
+  c->max_depth = s.max_depth;
   c->pyramid = pyramid;
   c->metric = metric;
   const auto& cam = s.camera;
@@ -110,7 +111,7 @@ std::shared_ptr<const FrameFeatures> make_rgbd_features(const cv::Mat& gray, con
     const int x = cvRound(f->keys[i].pt.x), y = cvRound(f->keys[i].pt.y);
     if (x < 0 || y < 0 || x >= depth_m.cols || y >= depth_m.rows) continue;
     const float d = depth_m.at<float>(y, x);
-    if (std::isfinite(d) && d > 0) {
+    if (std::isfinite(d) && d > 0 && (ctx->max_depth <= 0 || d <= ctx->max_depth)) {
       f->depth[i] = d;
       f->u_right[i] = f->keys_un[i].pt.x - static_cast<float>(ctx->bf) / d;
     }

@@ -29,6 +29,7 @@ struct FrameContext {
   double bf = 40.0;        // baseline times fx (pixels * metres)
   double th_depth = 3.0;   // metres: closer keypoints are "close" (reliable depth)
   double disparity_sigma = 0;  // pixels; 0 = ORB-SLAM's u_right residual (see RgbdCameraSettings)
+  double max_depth = 0;        // metres: keypoint depth readings beyond are not used (0 = no limit)
   ScalePyramid pyramid;
   DescriptorMetric metric = DescriptorMetric::orb();
   // Undistorted image bounds (the image corners undistorted), for projection checks.

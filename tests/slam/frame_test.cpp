@@ -48,6 +48,34 @@ TEST(Frame, DepthAndVirtualRightCoordinate) {
   EXPECT_NEAR(ctx->th_depth, 40.0 * 40.0 / 525.0, 1e-9);
 }
 
+// MaxDepth: readings beyond it are dropped at the keypoint (treated as no reading); 0 keeps all.
+TEST(Frame, DepthBeyondMaxDepthIsNotUsed) {
+  OrbExtractor orb;
+  cv::Mat depth(480, 640, CV_32F, cv::Scalar(3.0f));
+  depth(cv::Rect(320, 0, 320, 480)).setTo(7.0f);  // right half: 7 m
+  for (const double max_depth : {5.0, 0.0}) {
+    RgbdCameraSettings s = settings(0);
+    s.max_depth = max_depth;
+    const auto ctx = FrameContext::make(s, orb.pyramid(), DescriptorMetric::orb());
+    const auto f = make_rgbd_features(texture(), depth, ctx, orb);
+    ASSERT_GT(f->size(), 500u);
+    int near = 0, far = 0;
+    for (std::size_t i = 0; i < f->size(); ++i) {
+      const bool right = cvRound(f->keys[i].pt.x) >= 320;
+      if (right && max_depth > 0) {
+        EXPECT_FALSE(f->has_depth(i)) << max_depth;
+        EXPECT_LT(f->u_right[i], 0);
+      } else {
+        ASSERT_TRUE(f->has_depth(i)) << max_depth;
+        EXPECT_FLOAT_EQ(f->depth[i], right ? 7.0f : 3.0f);
+      }
+      (right ? far : near) += 1;
+    }
+    EXPECT_GT(near, 100);
+    EXPECT_GT(far, 100);
+  }
+}
+
 TEST(Frame, WrongDepthIsIgnoredNotFatal) {
   OrbExtractor orb;
   const auto ctx = FrameContext::make(settings(0), orb.pyramid(), DescriptorMetric::orb());
