@@ -17,6 +17,7 @@ struct TrajectoryPairOptions {
   std::size_t delta = 1;
   bool scale = false;
   std::string aligned_out;
+  std::vector<std::string> align_from;  // {EST, GT}: fit the alignment on this other pair
 };
 
 void add_pair_options(CLI::App& cmd, TrajectoryPairOptions& o) {
@@ -31,10 +32,24 @@ nlohmann::json run_ate(const TrajectoryPairOptions& o) {
   const Alignment align = parse_alignment(o.align);
   const Trajectory gt = read_tum_trajectory(o.gt);
   const Trajectory est = read_tum_trajectory(o.est);
-  const AteResult r = absolute_trajectory_error(gt, est, align, o.max_diff);
+  AteResult r;
+  nlohmann::json j;
+  if (o.align_from.empty()) {
+    r = absolute_trajectory_error(gt, est, align, o.max_diff);
+  } else {
+    // The source's way to judge a localization run: the map's run is aligned to its ground
+    // truth once, and that same transform carries the localization run into the truth's frame.
+    const AteResult fit =
+        absolute_trajectory_error(read_tum_trajectory(o.align_from[1]), read_tum_trajectory(o.align_from[0]), align, o.max_diff);
+    r = absolute_trajectory_error(gt, transformed(est, fit.est_to_gt), Alignment::kNone, o.max_diff);
+    r.est_to_gt = fit.est_to_gt;
+    j["align_from"] = {{"est", o.align_from[0]}, {"gt", o.align_from[1]}, {"rmse", fit.stats.rmse}, {"pairs", fit.stats.count}};
+    spdlog::info("alignment fitted on {} against {} ({} pairs, rmse {:.4f} m) and applied unchanged", o.align_from[0],
+                 o.align_from[1], fit.stats.count, fit.stats.rmse);
+  }
   spdlog::info("ATE ({} alignment, {} pairs): rmse {:.4f} m, mean {:.4f} m, median {:.4f} m, max {:.4f} m",
                to_string(align), r.stats.count, r.stats.rmse, r.stats.mean, r.stats.median, r.stats.max);
-  nlohmann::json j = to_json(r.stats);
+  j.update(to_json(r.stats));
   j["align"] = to_string(align);
   j["scale"] = r.est_to_gt.scale();
   const auto& q = r.est_to_gt.rotation();
@@ -94,6 +109,10 @@ const bool ate = register_command({
       add_pair_options(cmd, *o);
       cmd.add_option("--align", o->align, "Alignment of the estimate: se3, sim3 or none")->capture_default_str();
       cmd.add_option("--aligned-out", o->aligned_out, "Output: the estimate transformed into the ground truth's frame (TUM)");
+      cmd.add_option("--align-from", o->align_from,
+                     "EST GT: fit the alignment on this other run and its ground truth, and apply it to --est unchanged "
+                     "(a localization run judged in its map's aligned frame)")
+          ->expected(2);
       return [o] { return run_ate(*o); };
     },
     .order = 60});

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <fstream>
+#include <sstream>
 
 #include <nlohmann/json.hpp>
 
@@ -64,6 +65,52 @@ TEST(Cli, EvalAteJsonHasContractKeys) {
   for (const char* key : {"rmse", "mean", "median", "max", "pairs", "align"}) EXPECT_TRUE(j.contains(key)) << key;
   EXPECT_EQ(j["pairs"].get<int>(), 20);
   EXPECT_LT(j["rmse"].get<double>(), 1e-9);
+}
+
+// A trajectory as a second frame sees it: rotated 90 degrees about z, shifted by (1, 2, 3),
+// plus an offset along that frame's x.
+std::string in_other_frame(const std::string& tum, double offset_x) {
+  std::istringstream in(tum);
+  std::string out, line;
+  while (std::getline(in, line)) {
+    std::istringstream f(line);
+    double t, x, y, z;
+    f >> t >> x >> y >> z;
+    out += std::to_string(t) + " " + std::to_string(-y + 1 + offset_x) + " " + std::to_string(x + 2) + " " +
+           std::to_string(z + 3) + " 0 0 0.70710678 0.70710678\n";
+  }
+  return out;
+}
+
+TEST(Cli, EvalAteAlignFromAppliesAnotherRunsAlignmentUnchanged) {
+  // Run A (the map's) is exact in the other frame; run B (localization) is 0.1 m off along x
+  // everywhere. Fitted on A, B's error is exactly 0.1 m; fitted on B itself, the offset
+  // disappears into the alignment.
+  const auto gt_a = write("gt_a.txt", good_trajectory(0));
+  const auto est_a = write("est_a.txt", in_other_frame(good_trajectory(0), 0));
+  std::string gt_b_text;
+  for (int i = 0; i < 15; ++i)
+    gt_b_text += std::to_string(100 + i * 0.1) + " " + std::to_string(2 - 0.2 * i) + " " + std::to_string(0.03 * i * i) +
+                 " 0.5 0 0 0 1\n";
+  const auto gt_b = write("gt_b.txt", gt_b_text);
+  const auto est_b = write("est_b.txt", in_other_frame(gt_b_text, 0.1));
+  const auto fitted = run_cli("eval ate --json --gt " + shell_quote(gt_b) + " --est " + shell_quote(est_b) +
+                              " --align-from " + shell_quote(est_a) + " " + shell_quote(gt_a));
+  ASSERT_EQ(fitted.exit_code, 0) << fitted.err;
+  const auto j = nlohmann::json::parse(fitted.out);
+  EXPECT_NEAR(j["rmse"].get<double>(), 0.1, 1e-5);
+  EXPECT_NEAR(j["max"].get<double>(), 0.1, 1e-5);
+  EXPECT_EQ(j["pairs"].get<int>(), 15);
+  EXPECT_LT(j["align_from"]["rmse"].get<double>(), 1e-5);
+  const auto self = run_cli("eval ate --json --gt " + shell_quote(gt_b) + " --est " + shell_quote(est_b));
+  ASSERT_EQ(self.exit_code, 0) << self.err;
+  EXPECT_LT(nlohmann::json::parse(self.out)["rmse"].get<double>(), 1e-5);
+  // A missing file of the pair is named.
+  const auto missing = run_cli("eval ate --gt " + shell_quote(gt_b) + " --est " + shell_quote(est_b) +
+                               " --align-from /nonexistent/map_run.txt " + shell_quote(gt_a));
+  EXPECT_EQ(missing.exit_code, 2);
+  EXPECT_EQ(line_count(missing.err), 1) << missing.err;
+  EXPECT_NE(missing.err.find("/nonexistent/map_run.txt"), std::string::npos) << missing.err;
 }
 
 TEST(Cli, BadTrajectoryInputExitsTwoWithOneLineNamingTheFile) {
