@@ -90,7 +90,8 @@ void save_camera_settings(const std::filesystem::path& path, const RgbdCameraSet
       << "\nCamera.k1: " << c.k1 << "\nCamera.k2: " << c.k2 << "\nCamera.p1: " << c.p1 << "\nCamera.p2: " << c.p2
       << "\nCamera.k3: " << c.k3 << "\nCamera.width: " << c.width << "\nCamera.height: " << c.height
       << "\nCamera.fps: " << s.fps << "\nCamera.bf: " << s.bf << "\nCamera.RGB: " << (s.rgb_order ? 1 : 0)
-      << "\nThDepth: " << s.th_depth << "\nDepthMapFactor: " << s.depth_map_factor << "\n";
+      << "\nThDepth: " << s.th_depth << "\nDepthMapFactor: " << s.depth_map_factor
+      << "\nDisparitySigma: " << s.disparity_sigma << "\nMaxDepth: " << s.max_depth << "\n";
   if (!out) throw Failure(located(path, 0, "cannot write camera settings"));
 }
 

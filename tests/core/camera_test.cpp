@@ -76,7 +76,7 @@ TEST(CameraSettings, ReadsOrbSlamYamlWithOpenCvDirective) {
   const auto p = write_temp("bs_cam_ok.yaml",
                             "%YAML:1.0\nCamera.fx: 500.0\nCamera.fy: 501.0\nCamera.cx: 320\nCamera.cy: 240\n"
                             "Camera.k1: 0.1\nCamera.width: 640\nCamera.height: 480\nCamera.bf: 40.0\n"
-                            "DepthMapFactor: 1000.0\nMaxDepth: 4.5\n");
+                            "DepthMapFactor: 1000.0\nMaxDepth: 4.5\nDisparitySigma: 0.35\n");
   const auto s = load_camera_settings(p);
   EXPECT_DOUBLE_EQ(s.max_depth, 4.5);
   EXPECT_DOUBLE_EQ(s.camera.fx, 500.0);
@@ -90,6 +90,8 @@ TEST(CameraSettings, ReadsOrbSlamYamlWithOpenCvDirective) {
   const auto s2 = load_camera_settings(q);
   EXPECT_DOUBLE_EQ(s2.camera.fy, 501.0);
   EXPECT_DOUBLE_EQ(s2.depth_map_factor, 1000.0);
+  EXPECT_DOUBLE_EQ(s2.max_depth, 4.5);
+  EXPECT_DOUBLE_EQ(s2.disparity_sigma, 0.35);
 }
 
 // The error of loading `path` names every one of `parts` (file, line, key).
