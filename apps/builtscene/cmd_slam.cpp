@@ -21,6 +21,7 @@
 #include "nav/region.hpp"
 #include "ogm/ground_frame.hpp"
 #include "slam/map.hpp"
+#include "slam/map_points_csv.hpp"
 #include "slam/system.hpp"
 #include "slam_ogm_output.hpp"
 
@@ -34,7 +35,7 @@ struct SlamOptions {
   std::filesystem::path keyframes;
   long max_frames = 0;
   bool sync_mapping = false;
-  std::filesystem::path map_in, map_out;
+  std::filesystem::path map_in, map_out, map_points_out;
   std::string mode = "slam", mode_schedule, slam_region, world = "camera";
   double camera_height = 1.0;
   std::filesystem::path vocabulary;
@@ -111,7 +112,7 @@ nlohmann::json run_slam(const SlamOptions& opt) {
   const auto start_mode = slam::parse_mode(opt.mode);
   if (!start_mode) throw InputError("--mode: '" + opt.mode + "' must be slam or localize");
   const slam::ModePlan plan = make_mode_plan(opt);
-  for (const auto& out : {opt.trajectory, opt.keyframes, opt.map_out}) check_output_file(out);
+  for (const auto& out : {opt.trajectory, opt.keyframes, opt.map_out, opt.map_points_out}) check_output_file(out);
 
   std::optional<SlamOgmOutput> ogm;
   if (opt.ogm.enabled()) {
@@ -176,6 +177,11 @@ nlohmann::json run_slam(const SlamOptions& opt) {
                  info.points, info.bytes);
     map_out_json = {{"path", opt.map_out.string()}, {"keyframes", info.keyframes}, {"map_points", info.points},
                     {"bytes", info.bytes}};
+  }
+  nlohmann::json map_points_json = nullptr;
+  if (!opt.map_points_out.empty()) {
+    const auto info = slam::write_map_points_csv(system.map(), opt.map_points_out);
+    map_points_json = {{"path", opt.map_points_out.string()}, {"points", info.points}, {"rows", info.rows}};
   }
   nlohmann::json switches = nlohmann::json::array();
   for (const auto& sw : system.mode_switches())
@@ -254,6 +260,7 @@ nlohmann::json run_slam(const SlamOptions& opt) {
       {"mode_switches", switches},
       {"map_in", map_in_json},
       {"map_out", map_out_json},
+      {"map_points_out", map_points_json},
       {"stage_ms", system.timer().summary()},
       {"trajectory", opt.trajectory.string()},
       {"trajectory_poses", traj.size()},
@@ -299,6 +306,9 @@ const bool registered_slam = register_command({
                    "Run local mapping (and SAFT online learning) inline instead of in their threads (deterministic, slower)");
       cmd.add_option("--map-in", opt->map_in, "Saved map to start from (tracking relocalizes in it, then extends it)");
       cmd.add_option("--map-out", opt->map_out, "Output: the map at the end (binary, see docs/slam.md)");
+      cmd.add_option("--map-points-out", opt->map_points_out,
+                     "Output: CSV of the map's points at the end, one row per keyframe observing each (position, "
+                     "keypoint, pyramid level, depth reading; see docs/slam.md)");
       cmd.add_option("--mode", opt->mode, "Mode at the start: slam or localize")->capture_default_str();
       cmd.add_option("--mode-schedule", opt->mode_schedule,
                      "Modes by frame range, e.g. 0-199:slam,200-399:localize (open end: 400-:slam)");
