@@ -71,6 +71,7 @@ RgbdCameraSettings load_camera_settings(const std::filesystem::path& path) {
   s.depth_map_factor = f.get_double("DepthMapFactor", 5000.0);
   s.disparity_sigma = f.get_double("DisparitySigma", s.disparity_sigma);
   s.max_depth = f.get_double("MaxDepth", s.max_depth);
+  s.far_depth = f.get_double("FarDepth", s.far_depth);
   if (c.fx <= 0 || c.fy <= 0) throw_input_error(path, 0, "Camera.fx and Camera.fy must be positive");
   if (c.width <= 0 || c.height <= 0) throw_input_error(path, 0, "Camera.width and Camera.height must be positive");
   if (s.depth_map_factor <= 0) throw_input_error(path, 0, "DepthMapFactor must be positive");
@@ -79,6 +80,8 @@ RgbdCameraSettings load_camera_settings(const std::filesystem::path& path) {
     throw_input_error(path, 0, "DisparitySigma must be a finite number >= 0 (pixels; 0 = ORB-SLAM's weighting)");
   if (!(s.max_depth >= 0) || !std::isfinite(s.max_depth))
     throw_input_error(path, 0, "MaxDepth must be a finite number >= 0 (metres; 0 = no limit)");
+  if (!(s.far_depth >= 0) || !std::isfinite(s.far_depth))
+    throw_input_error(path, 0, "FarDepth must be a finite number >= 0 (metres; 0 = every reading is a measurement)");
   return s;
 }
 
@@ -91,7 +94,8 @@ void save_camera_settings(const std::filesystem::path& path, const RgbdCameraSet
       << "\nCamera.k3: " << c.k3 << "\nCamera.width: " << c.width << "\nCamera.height: " << c.height
       << "\nCamera.fps: " << s.fps << "\nCamera.bf: " << s.bf << "\nCamera.RGB: " << (s.rgb_order ? 1 : 0)
       << "\nThDepth: " << s.th_depth << "\nDepthMapFactor: " << s.depth_map_factor
-      << "\nDisparitySigma: " << s.disparity_sigma << "\nMaxDepth: " << s.max_depth << "\n";
+      << "\nDisparitySigma: " << s.disparity_sigma << "\nMaxDepth: " << s.max_depth
+      << "\nFarDepth: " << s.far_depth << "\n";
   if (!out) throw Failure(located(path, 0, "cannot write camera settings"));
 }
 

@@ -44,6 +44,14 @@ struct RgbdCameraSettings {
   // 0 = no limit (the default): 5 m took the generated corridor's west leg from 3.5 % too long
   // to 0.1 % but moved whole corridor runs both ways (docs/slam.md, "Far depth readings").
   double max_depth = 0.0;
+  // Keypoint depth readings beyond this many metres are "far": they still place new map points,
+  // but the optimizers (frame pose, local and global bundle adjustment) and the matchers'
+  // checks treat the keypoint as monocular, without the disparity residual. [FarDepth], 0 = off
+  // (the default): 5 m took the generated corridor's west leg from 3.5 % too long to 0.0 % and
+  // the 5-seed corridor median from 7.15 to 5.44 cm, but a generated office run broke (a
+  // keyframe seeing only far points slid 5 m; 1.19 m ATE against 7.2 cm): docs/slam.md, "Far
+  // depth readings as measurements".
+  double far_depth = 0.0;
   bool rgb_order = true;           // Camera.RGB: 1 = images are RGB, 0 = BGR
 
   double close_depth() const { return th_depth * bf / camera.fx; }

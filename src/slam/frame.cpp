@@ -17,6 +17,7 @@ std::shared_ptr<const FrameContext> FrameContext::make(const RgbdCameraSettings&
   c->th_depth = s.close_depth();
   c->disparity_sigma = s.disparity_sigma;
   c->max_depth = s.max_depth;
+  c->far_depth = s.far_depth;
   c->pyramid = pyramid;
   c->metric = metric;
   const auto& cam = s.camera;
@@ -116,6 +117,10 @@ std::shared_ptr<const FrameFeatures> make_rgbd_features(const cv::Mat& gray, con
       f->u_right[i] = f->keys_un[i].pt.x - static_cast<float>(ctx->bf) / d;
     }
   }
+  // Far readings place points (depth) but are no disparity measurement (u_right < 0).
+  if (ctx->far_depth > 0)
+    for (std::size_t i = 0; i < n; ++i)
+      if (f->depth[i] > ctx->far_depth) f->u_right[i] = -1.0f;
   build_feature_grid(*f);
   return f;
 }

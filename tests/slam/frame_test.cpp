@@ -76,6 +76,38 @@ TEST(Frame, DepthBeyondMaxDepthIsNotUsed) {
   }
 }
 
+// FarDepth: a reading beyond it keeps its depth (it places map points) but gets no virtual
+// right coordinate, so the optimizers see a monocular keypoint; 0 makes every reading a
+// measurement.
+TEST(Frame, FarReadingsPlacePointsButAreNoDisparityMeasurement) {
+  OrbExtractor orb;
+  cv::Mat depth(480, 640, CV_32F, cv::Scalar(3.0f));
+  depth(cv::Rect(320, 0, 320, 480)).setTo(7.0f);  // right half: 7 m
+  for (const double far_depth : {5.0, 0.0}) {
+    RgbdCameraSettings s = settings(0);
+    s.far_depth = far_depth;
+    const auto ctx = FrameContext::make(s, orb.pyramid(), DescriptorMetric::orb());
+    const auto f = make_rgbd_features(texture(), depth, ctx, orb);
+    ASSERT_GT(f->size(), 500u);
+    int far = 0;
+    for (std::size_t i = 0; i < f->size(); ++i) {
+      const bool right = cvRound(f->keys[i].pt.x) >= 320;
+      ASSERT_TRUE(f->has_depth(i)) << far_depth;
+      EXPECT_FLOAT_EQ(f->depth[i], right ? 7.0f : 3.0f);
+      EXPECT_NEAR(f->unproject(i).z(), right ? 7.0 : 3.0, 1e-6);
+      if (right && far_depth > 0) {
+        EXPECT_LT(f->u_right[i], 0) << far_depth;
+        ++far;
+      } else {
+        EXPECT_NEAR(f->u_right[i], f->keys_un[i].pt.x - 40.0 / (right ? 7.0 : 3.0), 1e-4) << far_depth;
+      }
+    }
+    if (far_depth > 0) {
+      EXPECT_GT(far, 100);
+    }
+  }
+}
+
 TEST(Frame, WrongDepthIsIgnoredNotFatal) {
   OrbExtractor orb;
   const auto ctx = FrameContext::make(settings(0), orb.pyramid(), DescriptorMetric::orb());
