@@ -24,6 +24,14 @@ RgbdCameraSettings settings(double k1) {
   return s;
 }
 
+// Features of the test texture over a depth image of 3 m on the left half and 7 m on the right.
+std::shared_ptr<const FrameFeatures> near_left_far_right(const RgbdCameraSettings& s, OrbExtractor& orb) {
+  cv::Mat depth(480, 640, CV_32F, cv::Scalar(3.0f));
+  depth(cv::Rect(320, 0, 320, 480)).setTo(7.0f);
+  const auto ctx = FrameContext::make(s, orb.pyramid(), DescriptorMetric::orb());
+  return make_rgbd_features(texture(), depth, ctx, orb);
+}
+
 TEST(Frame, DepthAndVirtualRightCoordinate) {
   OrbExtractor orb;
   const auto ctx = FrameContext::make(settings(0), orb.pyramid(), DescriptorMetric::orb());
@@ -48,63 +56,41 @@ TEST(Frame, DepthAndVirtualRightCoordinate) {
   EXPECT_NEAR(ctx->th_depth, 40.0 * 40.0 / 525.0, 1e-9);
 }
 
-// MaxDepth: readings beyond it are dropped at the keypoint (treated as no reading); 0 keeps all.
-TEST(Frame, DepthBeyondMaxDepthIsNotUsed) {
+// MaxDepth drops readings beyond it at the keypoint (treated as no reading). FarDepth keeps a
+// reading beyond it (it places map points) but gives it no virtual right coordinate, so the
+// optimizers see a monocular keypoint. 0 turns either off.
+TEST(Frame, MaxDepthDropsFarReadingsAndFarDepthKeepsThemWithoutDisparity) {
+  struct Case {
+    double max_depth, far_depth;
+    bool far_has_depth, far_has_right;
+  };
   OrbExtractor orb;
-  cv::Mat depth(480, 640, CV_32F, cv::Scalar(3.0f));
-  depth(cv::Rect(320, 0, 320, 480)).setTo(7.0f);  // right half: 7 m
-  for (const double max_depth : {5.0, 0.0}) {
+  for (const Case c : {Case{5.0, 0.0, false, false}, Case{0.0, 5.0, true, false}, Case{0.0, 0.0, true, true}}) {
+    SCOPED_TRACE("MaxDepth " + std::to_string(c.max_depth) + ", FarDepth " + std::to_string(c.far_depth));
     RgbdCameraSettings s = settings(0);
-    s.max_depth = max_depth;
-    const auto ctx = FrameContext::make(s, orb.pyramid(), DescriptorMetric::orb());
-    const auto f = make_rgbd_features(texture(), depth, ctx, orb);
+    s.max_depth = c.max_depth;
+    s.far_depth = c.far_depth;
+    const auto f = near_left_far_right(s, orb);
     ASSERT_GT(f->size(), 500u);
     int near = 0, far = 0;
     for (std::size_t i = 0; i < f->size(); ++i) {
       const bool right = cvRound(f->keys[i].pt.x) >= 320;
-      if (right && max_depth > 0) {
-        EXPECT_FALSE(f->has_depth(i)) << max_depth;
-        EXPECT_LT(f->u_right[i], 0);
-      } else {
-        ASSERT_TRUE(f->has_depth(i)) << max_depth;
-        EXPECT_FLOAT_EQ(f->depth[i], right ? 7.0f : 3.0f);
-      }
       (right ? far : near) += 1;
+      const double z = right ? 7.0 : 3.0;
+      if (right && !c.far_has_depth) {
+        EXPECT_FALSE(f->has_depth(i));
+      } else {
+        ASSERT_TRUE(f->has_depth(i));
+        EXPECT_FLOAT_EQ(f->depth[i], static_cast<float>(z));
+        EXPECT_NEAR(f->unproject(i).z(), z, 1e-6);
+      }
+      if (right && !c.far_has_right)
+        EXPECT_LT(f->u_right[i], 0);
+      else
+        EXPECT_NEAR(f->u_right[i], f->keys_un[i].pt.x - 40.0 / z, 1e-4);
     }
     EXPECT_GT(near, 100);
     EXPECT_GT(far, 100);
-  }
-}
-
-// FarDepth: a reading beyond it keeps its depth (it places map points) but gets no virtual
-// right coordinate, so the optimizers see a monocular keypoint; 0 makes every reading a
-// measurement.
-TEST(Frame, FarReadingsPlacePointsButAreNoDisparityMeasurement) {
-  OrbExtractor orb;
-  cv::Mat depth(480, 640, CV_32F, cv::Scalar(3.0f));
-  depth(cv::Rect(320, 0, 320, 480)).setTo(7.0f);  // right half: 7 m
-  for (const double far_depth : {5.0, 0.0}) {
-    RgbdCameraSettings s = settings(0);
-    s.far_depth = far_depth;
-    const auto ctx = FrameContext::make(s, orb.pyramid(), DescriptorMetric::orb());
-    const auto f = make_rgbd_features(texture(), depth, ctx, orb);
-    ASSERT_GT(f->size(), 500u);
-    int far = 0;
-    for (std::size_t i = 0; i < f->size(); ++i) {
-      const bool right = cvRound(f->keys[i].pt.x) >= 320;
-      ASSERT_TRUE(f->has_depth(i)) << far_depth;
-      EXPECT_FLOAT_EQ(f->depth[i], right ? 7.0f : 3.0f);
-      EXPECT_NEAR(f->unproject(i).z(), right ? 7.0 : 3.0, 1e-6);
-      if (right && far_depth > 0) {
-        EXPECT_LT(f->u_right[i], 0) << far_depth;
-        ++far;
-      } else {
-        EXPECT_NEAR(f->u_right[i], f->keys_un[i].pt.x - 40.0 / (right ? 7.0 : 3.0), 1e-4) << far_depth;
-      }
-    }
-    if (far_depth > 0) {
-      EXPECT_GT(far, 100);
-    }
   }
 }
 
