@@ -3,6 +3,7 @@
 #include <cmath>
 #include <fstream>
 #include <iomanip>
+#include <string>
 
 #include "core/errors.hpp"
 #include "core/settings_file.hpp"
@@ -76,12 +77,13 @@ RgbdCameraSettings load_camera_settings(const std::filesystem::path& path) {
   if (c.width <= 0 || c.height <= 0) throw_input_error(path, 0, "Camera.width and Camera.height must be positive");
   if (s.depth_map_factor <= 0) throw_input_error(path, 0, "DepthMapFactor must be positive");
   if (s.fps <= 0) throw_input_error(path, 0, "Camera.fps must be positive");
-  if (!(s.disparity_sigma >= 0) || !std::isfinite(s.disparity_sigma))
-    throw_input_error(path, 0, "DisparitySigma must be a finite number >= 0 (pixels; 0 = ORB-SLAM's weighting)");
-  if (!(s.max_depth >= 0) || !std::isfinite(s.max_depth))
-    throw_input_error(path, 0, "MaxDepth must be a finite number >= 0 (metres; 0 = no limit)");
-  if (!(s.far_depth >= 0) || !std::isfinite(s.far_depth))
-    throw_input_error(path, 0, "FarDepth must be a finite number >= 0 (metres; 0 = every reading is a measurement)");
+  const auto require_finite_non_negative = [&](double value, const std::string& key, const std::string& meaning) {
+    if (!(value >= 0) || !std::isfinite(value))
+      throw_input_error(path, 0, key + " must be a finite number >= 0 (" + meaning + ")");
+  };
+  require_finite_non_negative(s.disparity_sigma, "DisparitySigma", "pixels; 0 = ORB-SLAM's weighting");
+  require_finite_non_negative(s.max_depth, "MaxDepth", "metres; 0 = no limit");
+  require_finite_non_negative(s.far_depth, "FarDepth", "metres; 0 = every reading is a measurement");
   return s;
 }
 

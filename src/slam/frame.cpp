@@ -114,13 +114,10 @@ std::shared_ptr<const FrameFeatures> make_rgbd_features(const cv::Mat& gray, con
     const float d = depth_m.at<float>(y, x);
     if (std::isfinite(d) && d > 0 && (ctx->max_depth <= 0 || d <= ctx->max_depth)) {
       f->depth[i] = d;
-      f->u_right[i] = f->keys_un[i].pt.x - static_cast<float>(ctx->bf) / d;
+      // A far reading places points (depth) but is no disparity measurement (u_right < 0).
+      if (ctx->far_depth <= 0 || d <= ctx->far_depth) f->u_right[i] = f->keys_un[i].pt.x - static_cast<float>(ctx->bf) / d;
     }
   }
-  // Far readings place points (depth) but are no disparity measurement (u_right < 0).
-  if (ctx->far_depth > 0)
-    for (std::size_t i = 0; i < n; ++i)
-      if (f->depth[i] > ctx->far_depth) f->u_right[i] = -1.0f;
   build_feature_grid(*f);
   return f;
 }
