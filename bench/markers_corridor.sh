@@ -6,7 +6,7 @@
 #   bench/markers_corridor.sh [WORKDIR]     (default /tmp/builtscene-markers-corridor)
 # Environment: LOOPS (5), NOISE (kinect | none), MAP_SEED (1), RUN_SEED (2), MAP_LOOPS (loops of
 # the map run, 1), SLAM_EXTRA (more `slam` arguments for the map run, e.g. "--sync-mapping
-# --depth-planes").
+# --depth-planes"), LOC_EXTRA (more `localize` arguments, e.g. "--camera far.yaml").
 # Output: WORKDIR/eval/markers.md, .csv tables, markers.png; bench-out/markers_corridor.json
 # (slam, localize and eval summaries) and a line per stage on stderr.
 set -euo pipefail
@@ -19,6 +19,7 @@ MAP_SEED=${MAP_SEED:-1}
 RUN_SEED=${RUN_SEED:-2}
 MAP_LOOPS=${MAP_LOOPS:-1}
 SLAM_EXTRA=${SLAM_EXTRA:-}
+LOC_EXTRA=${LOC_EXTRA:-}
 mkdir -p "$WORK" bench-out
 map_run="$WORK/map-$NOISE-$MAP_SEED"
 [ "$MAP_LOOPS" = 1 ] || map_run="$map_run-$MAP_LOOPS"
@@ -33,8 +34,9 @@ echo "markers_corridor: SLAM on $MAP_LOOPS loop(s) ($(wc -l < "$map_run/groundtr
   --ogm-out "$WORK/grid" $SLAM_EXTRA --json > "$WORK/slam.json"
 "$BIN" -q eval ate --gt "$map_run/groundtruth.txt" --est "$WORK/map_traj.txt" --json > "$WORK/slam_ate.json" || true
 echo "markers_corridor: localization over $LOOPS loops" >&2
+# shellcheck disable=SC2086
 "$BIN" -q localize --dataset "$loc_run" --map "$WORK/corridor.bsmap" --trajectory "$WORK/loc_traj.txt" \
-  --markers-out "$WORK/measured.csv" --sizes-from "$loc_run/markers.csv" --json > "$WORK/localize.json"
+  --markers-out "$WORK/measured.csv" --sizes-from "$loc_run/markers.csv" $LOC_EXTRA --json > "$WORK/localize.json"
 status=0
 "$BIN" -q eval markers --measured "$WORK/measured.csv" --truth "$loc_run/markers.csv" --align 3d \
   --out "$WORK/eval" --json > "$WORK/eval.json" || status=$?

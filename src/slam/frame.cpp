@@ -18,6 +18,7 @@ std::shared_ptr<const FrameContext> FrameContext::make(const RgbdCameraSettings&
   c->disparity_sigma = s.disparity_sigma;
   c->max_depth = s.max_depth;
   c->far_depth = s.far_depth;
+  c->far_min_shared = s.far_depth_min_shared;
   c->pyramid = pyramid;
   c->metric = metric;
   const auto& cam = s.camera;
@@ -114,12 +115,19 @@ std::shared_ptr<const FrameFeatures> make_rgbd_features(const cv::Mat& gray, con
     const float d = depth_m.at<float>(y, x);
     if (std::isfinite(d) && d > 0 && (ctx->max_depth <= 0 || d <= ctx->max_depth)) {
       f->depth[i] = d;
-      // A far reading places points (depth) but is no disparity measurement (u_right < 0).
-      if (ctx->far_depth <= 0 || d <= ctx->far_depth) f->u_right[i] = f->keys_un[i].pt.x - static_cast<float>(ctx->bf) / d;
+      f->u_right[i] = f->keys_un[i].pt.x - static_cast<float>(ctx->bf) / d;
     }
   }
   build_feature_grid(*f);
   return f;
+}
+
+bool far_kept(const FrameFeatures& f, const std::vector<std::shared_ptr<MapPoint>>& points) {
+  const int needed = f.ctx->far_min_shared;
+  if (f.ctx->far_depth <= 0 || needed <= 0) return false;
+  int shared = 0;
+  for (std::size_t i = 0; i < points.size() && shared < needed; ++i) shared += points[i] && points[i]->observation_count() >= 2;
+  return shared < needed;
 }
 
 Frame::Frame(long id_, double timestamp_, std::shared_ptr<const FrameFeatures> features)

@@ -17,6 +17,7 @@
 #include "core/se3.hpp"
 #include "features/descriptor.hpp"
 #include "features/orb_extractor.hpp"
+#include "slam/observation.hpp"
 
 namespace builtscene::slam {
 
@@ -31,6 +32,7 @@ struct FrameContext {
   double disparity_sigma = 0;  // pixels; 0 = ORB-SLAM's u_right residual (see RgbdCameraSettings)
   double max_depth = 0;        // metres: keypoint depth readings beyond are not used (0 = no limit)
   double far_depth = 0;        // metres: readings beyond place points but give no disparity residual (0 = none)
+  int far_min_shared = 0;      // a view with fewer shared map points keeps its far residuals (see far_kept)
   ScalePyramid pyramid;
   DescriptorMetric metric = DescriptorMetric::orb();
   // Undistorted image bounds (the image corners undistorted), for projection checks.
@@ -51,19 +53,38 @@ struct FrameFeatures {
   std::vector<cv::KeyPoint> keys_un;  // undistorted
   cv::Mat descriptors;                // one row per keypoint
   std::vector<float> depth;           // metres, <= 0 when unknown
-  std::vector<float> u_right;         // virtual right coordinate, < 0 when unknown
+  std::vector<float> u_right;         // virtual right coordinate of every depth reading, < 0 when none
   // Keypoints binned by undistorted position: cell c holds grid_items[grid_start[c] .. grid_start[c+1]).
   std::vector<int> grid_start, grid_items;
 
   std::size_t size() const { return keys_un.size(); }
   bool has_depth(std::size_t i) const { return depth[i] > 0; }
   bool is_close(std::size_t i) const { return depth[i] > 0 && depth[i] < ctx->th_depth; }
+  // Beyond ctx->far_depth (FarDepth): the reading places points but is a disparity measurement
+  // only where `keep_far` (a view that would otherwise have nothing to hold its range).
+  bool is_far(std::size_t i) const { return ctx->far_depth > 0 && depth[i] > ctx->far_depth; }
+  float measured_u_right(std::size_t i, bool keep_far = false) const { return keep_far || !is_far(i) ? u_right[i] : -1.f; }
+  // Keypoint i as the optimizers measure it (pixel, level information, disparity where measured).
+  Observation observation(std::size_t i, bool keep_far = false) const {
+    Observation o;
+    o.uv = {keys_un[i].pt.x, keys_un[i].pt.y};
+    o.inv_sigma2 = ctx->pyramid.inv_sigma2[static_cast<std::size_t>(keys_un[i].octave)];
+    o.u_right = measured_u_right(i, keep_far);
+    return o;
+  }
   // Keypoint indices within radius r of (u, v) (square window), octave in [min_level, max_level]
   // (negative = any).
   std::vector<int> in_area(float u, float v, float r, int min_level = -1, int max_level = -1) const;
   // Camera-frame point of keypoint i from its depth (undistorted coordinates).
   Eigen::Vector3d unproject(std::size_t i) const;
 };
+
+// Whether a view (a frame or keyframe with these map points per keypoint, null where none) keeps
+// its far readings' disparity residuals: FarDepth is on and fewer than ctx->far_min_shared of
+// its points are observed by two or more keyframes. Such a view (one made while the
+// depth-odometry bridge carried the camera through a doorway) is held by nothing else and
+// would slide in bundle adjustment. Call with the map lock held.
+bool far_kept(const FrameFeatures& f, const std::vector<std::shared_ptr<MapPoint>>& points);
 
 // Fills the area-query grid from keys_un (needs ctx); used when features are loaded from a file.
 void build_feature_grid(FrameFeatures& f);

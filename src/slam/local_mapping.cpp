@@ -331,8 +331,7 @@ void LocalMapping::triangulate_with_neighbours(KeyFrame& kf) {
         continue;
       }
       // In front of both cameras, reprojecting within the chi-square bound in both.
-      Observation o1{Eigen::Vector2d(k1.pt.x, k1.pt.y), f1.u_right[is], pyr.inv_sigma2[static_cast<std::size_t>(k1.octave)]};
-      Observation o2{Eigen::Vector2d(k2.pt.x, k2.pt.y), f2.u_right[j], pyr.inv_sigma2[static_cast<std::size_t>(k2.octave)]};
+      const Observation o1 = f1.observation(is), o2 = f2.observation(j);
       if (reprojection_chi2(K, o1, T1 * pw) > (o1.stereo() ? kChi2Stereo : kChi2Mono)) continue;
       if (reprojection_chi2(K, o2, T2 * pw) > (o2.stereo() ? kChi2Stereo : kChi2Mono)) continue;
       // Scale consistency: the distance ratio must agree with the pyramid levels.
@@ -431,7 +430,11 @@ void LocalMapping::local_bundle_adjustment(KeyFrame& kf) {
           p->ba_mark = kf.id;
           pts.push_back(p);
         }
-    const auto& pyr = kf.f->ctx->pyramid;
+    KeyFrameMap<bool> keep_far;  // far_kept, decided once per keyframe
+    const auto far_kept_by = [&](KeyFrame* k) {
+      const auto it = keep_far.find(k);
+      return it != keep_far.end() ? it->second : keep_far.emplace(k, far_kept(*k->f, k->points)).first->second;
+    };
     for (std::size_t i = 0; i < pts.size(); ++i) {
       pb.points.push_back(pts[i]->position);
       for (const auto& [okf, idx] : pts[i]->observations) {
@@ -445,9 +448,7 @@ void LocalMapping::local_bundle_adjustment(KeyFrame& kf) {
         BundleAdjustmentProblem::Measurement m;
         m.camera = it->second;
         m.point = static_cast<int>(i);
-        m.o.uv = {okf->f->keys_un[is].pt.x, okf->f->keys_un[is].pt.y};
-        m.o.u_right = okf->f->u_right[is];
-        m.o.inv_sigma2 = pyr.inv_sigma2[static_cast<std::size_t>(okf->f->keys_un[is].octave)];
+        m.o = okf->f->observation(is, far_kept_by(okf));
         pb.measurements.push_back(m);
         links.push_back({okf, pts[i].get(), idx});
       }

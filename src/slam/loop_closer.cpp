@@ -497,6 +497,8 @@ void LoopCloser::run_global_ba(long loop, long keyframe, long matched) {
       cams.push_back(k);
       pb.cameras.push_back({k->pose(), k == all.front()});  // the oldest keyframe holds the gauge
     }
+    std::unordered_map<const KeyFrame*, bool> keep_far;  // far_kept, once per keyframe
+    for (const auto& k : cams) keep_far[k.get()] = far_kept(*k->f, k->points);
     for (const auto& p : map_.points()) {
       if (p->bad) continue;
       int seen = 0;
@@ -512,9 +514,7 @@ void LoopCloser::run_global_ba(long loop, long keyframe, long matched) {
         BundleAdjustmentProblem::Measurement meas;
         meas.camera = it->second;
         meas.point = pi;
-        meas.o.uv = {okf->f->keys_un[is].pt.x, okf->f->keys_un[is].pt.y};
-        meas.o.u_right = okf->f->u_right[is];
-        meas.o.inv_sigma2 = okf->f->ctx->pyramid.inv_sigma2[static_cast<std::size_t>(okf->f->keys_un[is].octave)];
+        meas.o = okf->f->observation(is, keep_far.at(okf));
         pb.measurements.push_back(meas);
       }
     }

@@ -72,7 +72,7 @@ int search_by_projection(Frame& current, const Frame& last, float th) {
     for (int c : cand) {
       const auto& existing = current.points[static_cast<std::size_t>(c)];
       if (existing && existing->observation_count() > 0) continue;
-      if (f.u_right[static_cast<std::size_t>(c)] >= 0 && std::abs(ur - f.u_right[static_cast<std::size_t>(c)]) > r) continue;
+      if (const float fu = f.measured_u_right(static_cast<std::size_t>(c)); fu >= 0 && std::abs(ur - fu) > r) continue;
       const float d = metric.distance(p->descriptor, 0, f.descriptors, c);
       if (d < best) {
         best = d;
@@ -107,7 +107,7 @@ int search_local_points(Frame& frame, const std::vector<ProjectedPoint>& candida
     for (int k : cand) {
       const auto ks = static_cast<std::size_t>(k);
       if (frame.points[ks] && frame.points[ks]->observation_count() > 0) continue;
-      if (c.u_right >= 0 && f.u_right[ks] >= 0 && std::abs(c.u_right - f.u_right[ks]) > r) continue;
+      if (const float fu = f.measured_u_right(ks); c.u_right >= 0 && fu >= 0 && std::abs(c.u_right - fu) > r) continue;
       const float d = metric.distance(p->descriptor, 0, f.descriptors, k);
       if (d < best) {
         second = best;
@@ -202,8 +202,8 @@ int fuse(KeyFrame& kf, const std::vector<std::shared_ptr<MapPoint>>& points, Map
       const auto& kp = f.keys_un[ks];
       const double inv_s2 = ctx.pyramid.inv_sigma2[static_cast<std::size_t>(kp.octave)];
       double e2 = (u - kp.pt.x) * (u - kp.pt.x) + (v - kp.pt.y) * (v - kp.pt.y);
-      if (f.u_right[ks] >= 0) {
-        e2 += (ur - f.u_right[ks]) * (ur - f.u_right[ks]);
+      if (const float fu = f.measured_u_right(ks); fu >= 0) {
+        e2 += (ur - fu) * (ur - fu);
         if (e2 * inv_s2 > kChi2Stereo) continue;
       } else if (e2 * inv_s2 > kChi2Mono) {
         continue;

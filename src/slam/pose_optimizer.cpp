@@ -139,16 +139,12 @@ int optimize_frame_pose(Frame& frame, const PoseOptimizerOptions& options) {
   std::vector<Observation> obs;
   std::vector<std::size_t> index;
   const auto& f = *frame.f;
-  const auto& pyr = f.ctx->pyramid;
+  const bool keep_far = far_kept(f, frame.points);
   for (std::size_t i = 0; i < frame.points.size(); ++i) {
     const auto& p = frame.points[i];
     if (!p) continue;
     pts.push_back(p->position);
-    Observation o;
-    o.uv = {f.keys_un[i].pt.x, f.keys_un[i].pt.y};
-    o.u_right = f.u_right[i];
-    o.inv_sigma2 = pyr.inv_sigma2[static_cast<std::size_t>(f.keys_un[i].octave)];
-    obs.push_back(o);
+    obs.push_back(f.observation(i, keep_far));
     index.push_back(i);
   }
   const auto r = optimize_pose(frame.T_cw, pts, obs, intrinsics_of(*f.ctx), options);

@@ -4,6 +4,8 @@
 #include <opencv2/imgproc.hpp>
 
 #include "slam/frame.hpp"
+#include "slam/key_frame.hpp"
+#include "slam/map_point.hpp"
 
 namespace builtscene::slam {
 namespace {
@@ -57,12 +59,13 @@ TEST(Frame, DepthAndVirtualRightCoordinate) {
 }
 
 // MaxDepth drops readings beyond it at the keypoint (treated as no reading). FarDepth keeps a
-// reading beyond it (it places map points) but gives it no virtual right coordinate, so the
-// optimizers see a monocular keypoint. 0 turns either off.
+// reading beyond it (it places map points) but, as a measurement, gives it no virtual right
+// coordinate (measured_u_right < 0), so the optimizers treat the keypoint as monocular. The
+// reading's own right coordinate stays (for a view that keeps its far residuals, below).
 TEST(Frame, MaxDepthDropsFarReadingsAndFarDepthKeepsThemWithoutDisparity) {
   struct Case {
     double max_depth, far_depth;
-    bool far_has_depth, far_has_right;
+    bool far_has_depth, far_measured;
   };
   OrbExtractor orb;
   for (const Case c : {Case{5.0, 0.0, false, false}, Case{0.0, 5.0, true, false}, Case{0.0, 0.0, true, true}}) {
@@ -77,21 +80,57 @@ TEST(Frame, MaxDepthDropsFarReadingsAndFarDepthKeepsThemWithoutDisparity) {
       const bool right = cvRound(f->keys[i].pt.x) >= 320;
       (right ? far : near) += 1;
       const double z = right ? 7.0 : 3.0;
+      const float u_right = static_cast<float>(f->keys_un[i].pt.x - 40.0 / z);
       if (right && !c.far_has_depth) {
         EXPECT_FALSE(f->has_depth(i));
-      } else {
-        ASSERT_TRUE(f->has_depth(i));
-        EXPECT_FLOAT_EQ(f->depth[i], static_cast<float>(z));
-        EXPECT_NEAR(f->unproject(i).z(), z, 1e-6);
+        EXPECT_LT(f->measured_u_right(i, true), 0);
+        continue;
       }
-      if (right && !c.far_has_right)
-        EXPECT_LT(f->u_right[i], 0);
+      ASSERT_TRUE(f->has_depth(i));
+      EXPECT_FLOAT_EQ(f->depth[i], static_cast<float>(z));
+      EXPECT_NEAR(f->unproject(i).z(), z, 1e-6);
+      EXPECT_NEAR(f->measured_u_right(i, true), u_right, 1e-4);
+      if (right && !c.far_measured)
+        EXPECT_LT(f->measured_u_right(i), 0);
       else
-        EXPECT_NEAR(f->u_right[i], f->keys_un[i].pt.x - 40.0 / z, 1e-4);
+        EXPECT_NEAR(f->measured_u_right(i), u_right, 1e-4);
     }
     EXPECT_GT(near, 100);
     EXPECT_GT(far, 100);
   }
+}
+
+// FarDepth's exception: a view with fewer than FarDepthMinShared map points that a second
+// keyframe also observes keeps its far readings as disparity measurements; points seen by one
+// keyframe alone do not count, near or far.
+TEST(Frame, AViewWithFewSharedPointsKeepsItsFarReadingsAsMeasurements) {
+  OrbExtractor orb;
+  RgbdCameraSettings s = settings(0);
+  s.far_depth = 5.0;
+  s.far_depth_min_shared = 3;
+  const auto f = near_left_far_right(s, orb);
+  Frame frame(0, 0.0, f);
+  KeyFrame a(1, frame), b(2, frame);
+  std::vector<std::shared_ptr<MapPoint>> points(f->size());
+  const auto add_point = [&](int i, bool shared) {
+    auto p = std::make_shared<MapPoint>(i, Eigen::Vector3d::Zero(), &a, a.id);
+    p->add_observation(&a, i);
+    if (shared) p->add_observation(&b, i);
+    points[static_cast<std::size_t>(i)] = p;
+  };
+  EXPECT_TRUE(far_kept(*f, points));  // no points at all
+  for (int i = 0; i < 20; ++i) add_point(i, false);
+  EXPECT_TRUE(far_kept(*f, points));  // 20 points, none shared
+  add_point(20, true);
+  add_point(21, true);
+  EXPECT_TRUE(far_kept(*f, points));  // 2 shared
+  add_point(22, true);
+  EXPECT_FALSE(far_kept(*f, points));  // 3 shared
+  s.far_depth_min_shared = 0;  // no exception
+  EXPECT_FALSE(far_kept(*near_left_far_right(s, orb), {}));
+  s.far_depth_min_shared = 3;
+  s.far_depth = 0;  // FarDepth off: nothing to keep
+  EXPECT_FALSE(far_kept(*near_left_far_right(s, orb), {}));
 }
 
 TEST(Frame, WrongDepthIsIgnoredNotFatal) {
