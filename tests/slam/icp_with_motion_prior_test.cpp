@@ -13,6 +13,7 @@
 #include "core/so3.hpp"
 #include "slam/icp_with_motion_prior.hpp"
 #include "plane_depth_render.hpp"
+#include "synthetic_scene.hpp"
 
 namespace builtscene::slam {
 namespace {
@@ -26,10 +27,9 @@ using test::Plane;
 // Depth image of the planes seen by a camera at T_cw (world -> camera): the nearest hit.
 cv::Mat render(const std::vector<Plane>& planes, const SE3& T_cw) { return test::render_planes(planes, T_cw, 6.0); }
 
+// Both are relative motions T_cur_prev: their translations, not camera centres, are compared.
 double translation_error(const SE3& a, const SE3& b) { return (a.translation() - b.translation()).norm(); }
-double rotation_error_deg(const SE3& a, const SE3& b) {
-  return so3_log(a.rotation() * b.rotation().inverse()).norm() * 180.0 / M_PI;
-}
+using test::rotation_error_deg;
 
 // Camera at the origin looking along +z (world = first camera).
 const SE3 kFirst;
