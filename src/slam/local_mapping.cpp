@@ -411,10 +411,12 @@ void LocalMapping::local_bundle_adjustment(KeyFrame& kf) {
     if (kf.bad) return;
     pb.K = intrinsics_of(*kf.f->ctx);
     std::unordered_map<KeyFrame*, int> cam_index;
+    std::vector<char> keep_far;  // per camera: far_kept
     auto add_cam = [&](KeyFrame* k, bool fixed) {
       cam_index[k] = static_cast<int>(cams.size());
       cams.push_back(k->shared_from_this());
       pb.cameras.push_back({k->pose(), fixed || k->id == 0});
+      keep_far.push_back(far_kept(*k->f, k->points));
     };
     add_cam(&kf, false);
     kf.ba_local_mark = kf.id;
@@ -430,11 +432,6 @@ void LocalMapping::local_bundle_adjustment(KeyFrame& kf) {
           p->ba_mark = kf.id;
           pts.push_back(p);
         }
-    KeyFrameMap<bool> keep_far;  // far_kept, decided once per keyframe
-    const auto far_kept_by = [&](KeyFrame* k) {
-      const auto it = keep_far.find(k);
-      return it != keep_far.end() ? it->second : keep_far.emplace(k, far_kept(*k->f, k->points)).first->second;
-    };
     for (std::size_t i = 0; i < pts.size(); ++i) {
       pb.points.push_back(pts[i]->position);
       for (const auto& [okf, idx] : pts[i]->observations) {
@@ -448,7 +445,7 @@ void LocalMapping::local_bundle_adjustment(KeyFrame& kf) {
         BundleAdjustmentProblem::Measurement m;
         m.camera = it->second;
         m.point = static_cast<int>(i);
-        m.o = okf->f->observation(is, far_kept_by(okf));
+        m.o = okf->f->observation(is, keep_far[static_cast<std::size_t>(it->second)]);
         pb.measurements.push_back(m);
         links.push_back({okf, pts[i].get(), idx});
       }

@@ -478,6 +478,7 @@ void LoopCloser::run_global_ba(long loop, long keyframe, long matched) {
     for (const auto& k : all)
       if (!k->bad && (k->has_parent_link || k == all.front())) linked.insert(k.get());
     std::unordered_map<const KeyFrame*, int> cam_index;
+    std::vector<char> keep_far;  // per camera: far_kept
     for (const auto& k : all) {
       if (!linked.count(k.get())) continue;
       int shared = 0;
@@ -496,9 +497,8 @@ void LoopCloser::run_global_ba(long loop, long keyframe, long matched) {
       cam_index[k.get()] = static_cast<int>(cams.size());
       cams.push_back(k);
       pb.cameras.push_back({k->pose(), k == all.front()});  // the oldest keyframe holds the gauge
+      keep_far.push_back(far_kept(*k->f, k->points));
     }
-    std::unordered_map<const KeyFrame*, bool> keep_far;  // far_kept, once per keyframe
-    for (const auto& k : cams) keep_far[k.get()] = far_kept(*k->f, k->points);
     for (const auto& p : map_.points()) {
       if (p->bad) continue;
       int seen = 0;
@@ -514,7 +514,7 @@ void LoopCloser::run_global_ba(long loop, long keyframe, long matched) {
         BundleAdjustmentProblem::Measurement meas;
         meas.camera = it->second;
         meas.point = pi;
-        meas.o = okf->f->observation(is, keep_far.at(okf));
+        meas.o = okf->f->observation(is, keep_far[static_cast<std::size_t>(it->second)]);
         pb.measurements.push_back(meas);
       }
     }
