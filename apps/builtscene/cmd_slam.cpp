@@ -50,6 +50,8 @@ struct SlamOptions {
   int depth_prior_below = slam::TrackingOptions{}.depth_prior_below_inliers;
   int bridge_local_map = -1;  // --bridge-local-map
   int global_ba_iterations = slam::LoopClosingOptions{}.global_ba_iterations;
+  double bridge_link_cm = slam::BridgeLinkOptions{}.sigma_m * 100.0;
+  double bridge_link_deg = slam::BridgeLinkOptions{}.sigma_deg;
   double min_parallax_sigmas = slam::LocalMappingOptions{}.min_parallax_sigmas;
   std::optional<double> planar_pitch_deg;  // --planar-motion
   SlamOgmOptions ogm;
@@ -79,7 +81,9 @@ nlohmann::json run_slam(const SlamOptions& opt) {
                                      std::pair{"--depth-link-weight", opt.depth_link_weight},
                                      std::pair{"--depth-plane-weight", opt.depth_plane_weight},
                                      std::pair{"--depth-prior", opt.depth_prior},
-                                     std::pair{"--min-parallax-sigmas", opt.min_parallax_sigmas}})
+                                     std::pair{"--min-parallax-sigmas", opt.min_parallax_sigmas},
+                                     std::pair{"--bridge-link-cm", opt.bridge_link_cm},
+                                     std::pair{"--bridge-link-deg", opt.bridge_link_deg}})
     if (!std::isfinite(value)) throw InputError(std::string(flag) + ": not a number");
   slam::SystemOptions so;
   opt.features.apply(so);  // the descriptor flags, checked before the dataset is read
@@ -99,6 +103,8 @@ nlohmann::json run_slam(const SlamOptions& opt) {
   so.tracking.depth_prior_below_inliers = opt.depth_prior_below;
   so.tracking.bridge_local_map_inliers = opt.bridge_local_map;
   so.loop.global_ba_iterations = opt.global_ba_iterations;
+  so.loop.bridge_links.sigma_m = opt.bridge_link_cm / 100.0;
+  so.loop.bridge_links.sigma_deg = opt.bridge_link_deg;
   so.mapping.min_parallax_sigmas = opt.min_parallax_sigmas;
   if (opt.planar_pitch_deg) so.planar = slam::PlanarMotion::from_pitch(*opt.planar_pitch_deg);
   if (opt.motion_prior_cm > 0) {
@@ -370,6 +376,15 @@ const bool registered_slam = register_command({
                      "two phases (robust, then after removing outliers)")
           ->capture_default_str()
           ->check(CLI::Range(1, 1000));
+      cmd.add_option("--bridge-link-cm", opt->bridge_link_cm,
+                     "Global BA holds the pose between the keyframes either side of a stretch the depth odometry "
+                     "carried (a featureless turn) to its value after the pose graph, with this standard deviation "
+                     "in cm (0 = off; docs/slam.md, \"Bridge links\")")
+          ->capture_default_str()
+          ->check(CLI::Range(0.0, 1e4));
+      cmd.add_option("--bridge-link-deg", opt->bridge_link_deg, "... and this one in degrees")
+          ->capture_default_str()
+          ->check(CLI::Range(0.001, 180.0));
       cmd.add_option("--min-parallax-sigmas", opt->min_parallax_sigmas,
                      "Triangulate two rays only when their parallax is at least this many times its own standard "
                      "error (0 = ORB-SLAM's 1.15 degrees alone; 12 removes a 1 % range bias but can starve "

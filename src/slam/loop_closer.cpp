@@ -465,7 +465,7 @@ void LoopCloser::run_global_ba(long loop, long keyframe, long matched) {
   std::vector<std::shared_ptr<KeyFrame>> cams;
   std::vector<std::shared_ptr<MapPoint>> pts;
   std::vector<std::shared_ptr<MapPlane>> planes;
-  int gba_planes_merged = 0;
+  int gba_planes_merged = 0, bridge_links = 0;
   {
     std::lock_guard lock(map_.mutex());
     const auto all = map_.keyframes();
@@ -519,6 +519,7 @@ void LoopCloser::run_global_ba(long loop, long keyframe, long matched) {
       }
     }
     add_depth_links(cams, pb);  // TrackingOptions::depth_links
+    bridge_links = add_bridge_links(cams, opt_.bridge_links, pb);
     planes = add_plane_terms(cams, pb, opt_.planes, 0, /*hold_groups_as_a_whole=*/true);
   }
   {
@@ -587,8 +588,8 @@ void LoopCloser::run_global_ba(long loop, long keyframe, long matched) {
     stats_.planes_merged += gba_planes_merged;
   }
   add_time("global_ba", start);
-  spdlog::info("global BA after loop {} merged: {} keyframes, {} points, RMS {:.2f} -> {:.2f} px", loop, cams.size(),
-               pts.size(), r.initial_rms_px, r.final_rms_px);
+  spdlog::info("global BA after loop {} merged: {} keyframes, {} points, {} bridge links, RMS {:.2f} -> {:.2f} px", loop,
+               cams.size(), pts.size(), bridge_links, r.initial_rms_px, r.final_rms_px);
   emit(event);
 }
 

@@ -34,6 +34,7 @@
 #include <thread>
 
 #include "core/stage_timer.hpp"
+#include "slam/bridge_links.hpp"
 #include "slam/plane_landmark.hpp"
 #include "slam/loop_consistency.hpp"
 #include "slam/loop_event.hpp"
@@ -90,6 +91,8 @@ struct LoopClosingOptions {
   bool global_bundle_adjustment = true;
   int global_ba_iterations = 10;  // Ceres iterations (robust phase; as many after outlier classification)
   int global_ba_min_shared_points = 10;  // fewer: the keyframe follows its parent instead
+  // Relative-pose terms across stretches the depth-odometry bridge carried (bridge_links.hpp).
+  BridgeLinkOptions bridge_links;
 };
 
 class LoopCloser {

@@ -1,0 +1,37 @@
+#include "slam/bridge_links.hpp"
+
+#include <cmath>
+#include <unordered_map>
+
+namespace builtscene::slam {
+
+int add_bridge_links(const std::vector<std::shared_ptr<KeyFrame>>& cams, const BridgeLinkOptions& options,
+                     BundleAdjustmentProblem& pb) {
+  if (!(options.sigma_m > 0.0) || !(options.sigma_deg > 0.0)) return 0;
+  std::unordered_map<const KeyFrame*, int> index;
+  for (std::size_t c = 0; c < cams.size(); ++c) index[cams[c].get()] = static_cast<int>(c);
+  Eigen::Matrix<double, 6, 6> information = Eigen::Matrix<double, 6, 6>::Zero();
+  const double sigma_rad = options.sigma_deg * M_PI / 180.0;
+  information.diagonal() << Eigen::Vector3d::Constant(1.0 / (options.sigma_m * options.sigma_m)),
+      Eigen::Vector3d::Constant(1.0 / (sigma_rad * sigma_rad));
+  int added = 0;
+  for (std::size_t c = 0; c < cams.size(); ++c) {
+    const KeyFrame* k = cams[c].get();
+    bool bridged = false;
+    const KeyFrame* a = k;
+    // The tree is acyclic and ends at the root; the step bound guards a corrupt tree.
+    for (std::size_t steps = 0; a->parent && steps <= index.size() + 100000; ++steps) {
+      bridged = bridged || a->parent_by_odometry;
+      a = a->parent.get();
+      if (index.count(a)) break;
+    }
+    if (!bridged || a == k) continue;
+    const auto it = index.find(a);
+    if (it == index.end()) continue;
+    pb.relative_poses.push_back({static_cast<int>(c), it->second, k->pose() * a->pose_inverse(), information});
+    ++added;
+  }
+  return added;
+}
+
+}  // namespace builtscene::slam
