@@ -19,8 +19,8 @@ int add_bridge_links(const std::vector<std::shared_ptr<KeyFrame>>& cams, const B
     const KeyFrame* k = cams[c].get();
     bool bridged = false;
     const KeyFrame* a = k;
-    // The tree is acyclic and ends at the root; the step bound guards a corrupt tree.
-    for (std::size_t steps = 0; a->parent && steps <= index.size() + 100000; ++steps) {
+    // The tree ends at the root (a loaded map with a cycle is rejected by the map reader).
+    while (a->parent) {
       bridged = bridged || a->parent_by_odometry;
       a = a->parent.get();
       if (index.count(a)) break;
