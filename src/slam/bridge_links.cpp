@@ -18,18 +18,18 @@ int add_bridge_links(const std::vector<std::shared_ptr<KeyFrame>>& cams, const B
   for (std::size_t c = 0; c < cams.size(); ++c) {
     const KeyFrame* k = cams[c].get();
     bool bridged = false;
-    const KeyFrame* a = k;
     // The tree ends at the root (a loaded map with a cycle is rejected by the map reader).
-    while (a->parent) {
+    for (const KeyFrame* a = k; a->parent;) {
       bridged = bridged || a->parent_by_odometry;
       a = a->parent.get();
-      if (index.count(a)) break;
+      const auto it = index.find(a);
+      if (it == index.end()) continue;
+      if (bridged) {
+        pb.relative_poses.push_back({static_cast<int>(c), it->second, k->pose() * a->pose_inverse(), information});
+        ++added;
+      }
+      break;
     }
-    if (!bridged || a == k) continue;
-    const auto it = index.find(a);
-    if (it == index.end()) continue;
-    pb.relative_poses.push_back({static_cast<int>(c), it->second, k->pose() * a->pose_inverse(), information});
-    ++added;
   }
   return added;
 }

@@ -7,6 +7,7 @@
 
 #include "slam/bridge_links.hpp"
 #include "slam/map.hpp"
+#include "synthetic_scene.hpp"
 
 namespace builtscene::slam {
 namespace {
@@ -46,8 +47,6 @@ class BridgeLinks : public ::testing::Test {
   std::vector<std::shared_ptr<KeyFrame>> kfs_;
 };
 
-double rotation_deg(const SE3& T) { return Eigen::AngleAxisd(T.rotation_matrix()).angle() * 180.0 / M_PI; }
-
 TEST_F(BridgeLinks, LinkAcrossTheBridgedStretchAndOverABridgedEdgeOnly) {
   // 3, 4, 5 are left out of the problem (no points to hold them). Walking up from 6: 5 and 4
   // came by odometry, 3 is out, 2 is in: link 6 -> 2. 8's own edge is odometry: 8 -> 7.
@@ -66,7 +65,7 @@ TEST_F(BridgeLinks, LinkAcrossTheBridgedStretchAndOverABridgedEdgeOnly) {
   const SE3 T62 = a.T_ij;
   const Eigen::Vector3d c2_in_6 = kfs_[6]->pose() * kfs_[2]->camera_center();
   EXPECT_LT((T62.translation() - c2_in_6).norm(), 1e-9);
-  EXPECT_LT(rotation_deg(T62.inverse() * (kfs_[6]->pose() * kfs_[2]->pose_inverse())), 1e-6);
+  EXPECT_LT(test::rotation_error_deg(T62, kfs_[6]->pose() * kfs_[2]->pose_inverse()), 1e-6);
   // 2 cm and 0.5 degrees by default.
   EXPECT_NEAR(a.information(0, 0), 1.0 / (0.02 * 0.02), 1e-6);
   EXPECT_NEAR(a.information(5, 5), 1.0 / std::pow(0.5 * M_PI / 180.0, 2), 1e-3);
