@@ -73,7 +73,6 @@ RgbdCameraSettings load_camera_settings(const std::filesystem::path& path) {
   s.disparity_sigma = f.get_double("DisparitySigma", s.disparity_sigma);
   s.max_depth = f.get_double("MaxDepth", s.max_depth);
   s.far_depth = f.get_double("FarDepth", s.far_depth);
-  s.far_depth_min_shared = f.get_int("FarDepthMinShared", s.far_depth_min_shared);
   if (c.fx <= 0 || c.fy <= 0) throw_input_error(path, 0, "Camera.fx and Camera.fy must be positive");
   if (c.width <= 0 || c.height <= 0) throw_input_error(path, 0, "Camera.width and Camera.height must be positive");
   if (s.depth_map_factor <= 0) throw_input_error(path, 0, "DepthMapFactor must be positive");
@@ -85,8 +84,6 @@ RgbdCameraSettings load_camera_settings(const std::filesystem::path& path) {
   require_finite_non_negative(s.disparity_sigma, "DisparitySigma", "pixels; 0 = ORB-SLAM's weighting");
   require_finite_non_negative(s.max_depth, "MaxDepth", "metres; 0 = no limit");
   require_finite_non_negative(s.far_depth, "FarDepth", "metres; 0 = every reading is a measurement");
-  if (s.far_depth_min_shared < 0)
-    throw_input_error(path, 0, "FarDepthMinShared must be >= 0 (map points; 0 = FarDepth applies everywhere)");
   return s;
 }
 
@@ -100,7 +97,7 @@ void save_camera_settings(const std::filesystem::path& path, const RgbdCameraSet
       << "\nCamera.fps: " << s.fps << "\nCamera.bf: " << s.bf << "\nCamera.RGB: " << (s.rgb_order ? 1 : 0)
       << "\nThDepth: " << s.th_depth << "\nDepthMapFactor: " << s.depth_map_factor
       << "\nDisparitySigma: " << s.disparity_sigma << "\nMaxDepth: " << s.max_depth
-      << "\nFarDepth: " << s.far_depth << "\nFarDepthMinShared: " << s.far_depth_min_shared << "\n";
+      << "\nFarDepth: " << s.far_depth << "\n";
   if (!out) throw Failure(located(path, 0, "cannot write camera settings"));
 }
 

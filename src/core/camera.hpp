@@ -50,12 +50,9 @@ struct RgbdCameraSettings {
   // (the default): 5 m took the generated corridor's west leg from 3.5 % too long to 0.0 % and
   // the 5-seed corridor median from 7.15 to 5.44 cm: docs/slam.md, "Far depth readings as
   // measurements".
+  // Keyframes made by the depth-odometry bridge keep their far readings as measurements
+  // (KeyFrame::keeps_far_readings).
   double far_depth = 0.0;
-  // FarDepth's exception: a frame or keyframe with fewer than this many map points that other
-  // keyframes also observe keeps its far readings' disparity residuals, since nothing else holds
-  // its range (a keyframe made by the depth-odometry bridge in a doorway slid 5 m without them).
-  // [FarDepthMinShared], 0 = no exception.
-  int far_depth_min_shared = 30;
   bool rgb_order = true;           // Camera.RGB: 1 = images are RGB, 0 = BGR
 
   double close_depth() const { return th_depth * bf / camera.fx; }

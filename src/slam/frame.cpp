@@ -18,7 +18,6 @@ std::shared_ptr<const FrameContext> FrameContext::make(const RgbdCameraSettings&
   c->disparity_sigma = s.disparity_sigma;
   c->max_depth = s.max_depth;
   c->far_depth = s.far_depth;
-  c->far_min_shared = s.far_depth_min_shared;
   c->pyramid = pyramid;
   c->metric = metric;
   const auto& cam = s.camera;
@@ -120,14 +119,6 @@ std::shared_ptr<const FrameFeatures> make_rgbd_features(const cv::Mat& gray, con
   }
   build_feature_grid(*f);
   return f;
-}
-
-bool far_kept(const FrameFeatures& f, const std::vector<std::shared_ptr<MapPoint>>& points) {
-  const int needed = f.ctx->far_min_shared;
-  if (f.ctx->far_depth <= 0 || needed <= 0) return false;
-  int shared = 0;
-  for (std::size_t i = 0; i < points.size() && shared < needed; ++i) shared += points[i] && points[i]->observation_count() >= 2;
-  return shared < needed;
 }
 
 Frame::Frame(long id_, double timestamp_, std::shared_ptr<const FrameFeatures> features)

@@ -32,7 +32,6 @@ struct FrameContext {
   double disparity_sigma = 0;  // pixels; 0 = ORB-SLAM's u_right residual (see RgbdCameraSettings)
   double max_depth = 0;        // metres: keypoint depth readings beyond are not used (0 = no limit)
   double far_depth = 0;        // metres: readings beyond place points but give no disparity residual (0 = none)
-  int far_min_shared = 0;      // a view with fewer shared map points keeps its far residuals (see far_kept)
   ScalePyramid pyramid;
   DescriptorMetric metric = DescriptorMetric::orb();
   // Undistorted image bounds (the image corners undistorted), for projection checks.
@@ -61,7 +60,7 @@ struct FrameFeatures {
   bool has_depth(std::size_t i) const { return depth[i] > 0; }
   bool is_close(std::size_t i) const { return depth[i] > 0 && depth[i] < ctx->th_depth; }
   // Beyond ctx->far_depth (FarDepth): the reading places points but is a disparity measurement
-  // only where `keep_far` (a view that would otherwise have nothing to hold its range).
+  // only where `keep_far` (a keyframe the depth-odometry bridge made: KeyFrame::keeps_far_readings).
   bool is_far(std::size_t i) const { return ctx->far_depth > 0 && depth[i] > ctx->far_depth; }
   float measured_u_right(std::size_t i, bool keep_far = false) const { return keep_far || !is_far(i) ? u_right[i] : -1.f; }
   // Keypoint i as the optimizers measure it (pixel, level information, disparity where measured).
@@ -78,13 +77,6 @@ struct FrameFeatures {
   // Camera-frame point of keypoint i from its depth (undistorted coordinates).
   Eigen::Vector3d unproject(std::size_t i) const;
 };
-
-// Whether a view (a frame or keyframe with these map points per keypoint, null where none) keeps
-// its far readings' disparity residuals: FarDepth is on and fewer than ctx->far_min_shared of
-// its points are observed by two or more keyframes. Such a view (one made while the
-// depth-odometry bridge carried the camera through a doorway) is held by nothing else and
-// would slide in bundle adjustment. Call with the map lock held.
-bool far_kept(const FrameFeatures& f, const std::vector<std::shared_ptr<MapPoint>>& points);
 
 // Fills the area-query grid from keys_un (needs ctx); used when features are loaded from a file.
 void build_feature_grid(FrameFeatures& f);

@@ -70,6 +70,11 @@ class KeyFrame : public std::enable_shared_from_this<KeyFrame> {
   // that edge as odometry, not as shared points.
   std::shared_ptr<KeyFrame> odometry_parent;
   bool parent_by_odometry = false;
+  // FarDepth's exception: a keyframe the bridge made keeps its far depth readings as disparity
+  // measurements in bundle adjustment, since it shares no point that could hold its range (the
+  // generated office's doorway keyframe slid 5 m without them). Every other keyframe and every
+  // frame treats them as monocular. Call with the map lock held.
+  bool keeps_far_readings() const { return f->ctx->far_depth > 0 && (parent_by_odometry || odometry_parent); }
   // Depth link: point-to-plane ICP between this keyframe's depth image and the previous
   // keyframe's, made by tracking; measured T_this_prev and the information of its residuals
   // (left increment (t, w) of T_this_prev). Bundle adjustment adds it as a relative-pose

@@ -411,12 +411,12 @@ void LocalMapping::local_bundle_adjustment(KeyFrame& kf) {
     if (kf.bad) return;
     pb.K = intrinsics_of(*kf.f->ctx);
     std::unordered_map<KeyFrame*, int> cam_index;
-    std::vector<char> keep_far;  // per camera: far_kept
+    std::vector<char> keep_far;  // per camera: KeyFrame::keeps_far_readings
     auto add_cam = [&](KeyFrame* k, bool fixed) {
       cam_index[k] = static_cast<int>(cams.size());
       cams.push_back(k->shared_from_this());
       pb.cameras.push_back({k->pose(), fixed || k->id == 0});
-      keep_far.push_back(far_kept(*k->f, k->points));
+      keep_far.push_back(k->keeps_far_readings());
     };
     add_cam(&kf, false);
     kf.ba_local_mark = kf.id;

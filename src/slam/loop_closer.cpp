@@ -478,7 +478,7 @@ void LoopCloser::run_global_ba(long loop, long keyframe, long matched) {
     for (const auto& k : all)
       if (!k->bad && (k->has_parent_link || k == all.front())) linked.insert(k.get());
     std::unordered_map<const KeyFrame*, int> cam_index;
-    std::vector<char> keep_far;  // per camera: far_kept
+    std::vector<char> keep_far;  // per camera: KeyFrame::keeps_far_readings
     for (const auto& k : all) {
       if (!linked.count(k.get())) continue;
       int shared = 0;
@@ -497,7 +497,7 @@ void LoopCloser::run_global_ba(long loop, long keyframe, long matched) {
       cam_index[k.get()] = static_cast<int>(cams.size());
       cams.push_back(k);
       pb.cameras.push_back({k->pose(), k == all.front()});  // the oldest keyframe holds the gauge
-      keep_far.push_back(far_kept(*k->f, k->points));
+      keep_far.push_back(k->keeps_far_readings());
     }
     for (const auto& p : map_.points()) {
       if (p->bad) continue;

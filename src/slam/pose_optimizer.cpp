@@ -139,12 +139,11 @@ int optimize_frame_pose(Frame& frame, const PoseOptimizerOptions& options) {
   std::vector<Observation> obs;
   std::vector<std::size_t> index;
   const auto& f = *frame.f;
-  const bool keep_far = far_kept(f, frame.points);
   for (std::size_t i = 0; i < frame.points.size(); ++i) {
     const auto& p = frame.points[i];
     if (!p) continue;
     pts.push_back(p->position);
-    obs.push_back(f.observation(i, keep_far));
+    obs.push_back(f.observation(i));  // a frame's far readings are never disparity measurements
     index.push_back(i);
   }
   const auto r = optimize_pose(frame.T_cw, pts, obs, intrinsics_of(*f.ctx), options);

@@ -8,18 +8,15 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "../common/scratch_dir.hpp"
 #include "couple/lcm_codec.hpp"
 #include "couple/lcm_log.hpp"
 #include "couple/model_config.hpp"
 
 namespace couple_test {
 
-inline std::filesystem::path temp_dir(const std::string& name) {
-  const auto d = std::filesystem::temp_directory_path() / ("bs_couple_" + name + "_" + std::to_string(::getpid()));
-  std::filesystem::remove_all(d);
-  std::filesystem::create_directories(d);
-  return d;
-}
+// Removed when the test process exits.
+inline std::filesystem::path temp_dir(const std::string& name) { return builtscene::testing::scratch_dir("couple_" + name); }
 
 inline void write(const std::filesystem::path& p, const std::string& text) {
   std::filesystem::create_directories(p.parent_path());

@@ -13,6 +13,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "../common/run_cli.hpp"
+#include "../common/scratch_dir.hpp"
 #include "io/trajectory.hpp"
 #include "ogm/map_server_io.hpp"
 
@@ -22,6 +23,12 @@ namespace {
 namespace fs = std::filesystem;
 using testing::run_cli;
 using testing::shell_quote;
+
+// The maps the tests build, removed when the process exits.
+const fs::path& work() {
+  static const fs::path d = testing::scratch_dir("ogm_lab");
+  return d;
+}
 
 const fs::path& lab_room() {
   static const fs::path dir = [] {
@@ -43,7 +50,7 @@ nlohmann::json build(const fs::path& out, const std::string& extra) {
 }
 
  void check_map_scores() {
-  const auto j = build(fs::temp_directory_path() / ("bs_ogm_lab_map_" + std::to_string(::getpid())), "--truth " + shell_quote(lab_room() / "truth_map.yaml"));
+  const auto j = build(work() / "map", "--truth " + shell_quote(lab_room() / "truth_map.yaml"));
   ASSERT_TRUE(j.contains("score"));
   EXPECT_GE(j["score"]["occupied_precision"].get<double>(), 0.90);
   EXPECT_GE(j["score"]["occupied_recall"].get<double>(), 0.85);
@@ -61,8 +68,8 @@ bool in_footprint(const nlohmann::json& box, const Eigen::Vector2d& p, double ma
 }
 
 void check_desk_tops() {
-  const auto band = fs::temp_directory_path() / ("bs_ogm_lab_band_" + std::to_string(::getpid()));
-  const auto one = fs::temp_directory_path() / ("bs_ogm_lab_one_height_" + std::to_string(::getpid()));
+  const auto band = work() / "band";
+  const auto one = work() / "one_height";
   build(band, "--world zup");
   build(one, "--world zup --min-height 0.29 --max-height 0.31");  // a 2D lidar at 0.30 m
   const OccupancyGrid a = load_map_server(fs::path(band.string() + ".yaml"));
@@ -96,8 +103,8 @@ void check_desk_tops() {
 // --frame-images: one picture per integrated frame, named by its dataset frame; the last one
 // shows the final grid, so it equals the map's own picture pixel for pixel.
 void check_frame_images() {
-  const auto out = fs::temp_directory_path() / ("bs_ogm_lab_frames_" + std::to_string(::getpid()));
-  const auto dir = fs::temp_directory_path() / ("bs_ogm_lab_frames_dir_" + std::to_string(::getpid()));
+  const auto out = work() / "frames";
+  const auto dir = work() / "frames_dir";
   fs::remove_all(dir);
   const auto j = build(out, "--frame-images " + shell_quote(dir));
   ASSERT_TRUE(j.contains("scans"));
@@ -124,9 +131,9 @@ void check_carried_comparison() {
                           Eigen::Vector3d(1.5, -0.7, 2.0));
   Trajectory moved = read_tum_trajectory(lab_room() / "groundtruth.txt");
   for (auto& p : moved) p.pose = T_moved_world * p.pose;
-  const auto moved_path = fs::temp_directory_path() / ("bs_ogm_lab_moved_" + std::to_string(::getpid()) + ".txt");
+  const auto moved_path = work() / "moved.txt";
   write_tum_trajectory(moved_path, moved);
-  const auto out = fs::temp_directory_path() / ("bs_ogm_lab_moved_map_" + std::to_string(::getpid()));
+  const auto out = work() / "moved_map";
   const auto r0 = run_cli("ogm build --json --keyframes-only --world auto --dataset " + shell_quote(lab_room()) +
                           " --poses " + shell_quote(moved_path) + " --out " + shell_quote(out));
   ASSERT_EQ(r0.exit_code, 0) << r0.err;

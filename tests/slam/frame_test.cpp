@@ -100,37 +100,35 @@ TEST(Frame, MaxDepthDropsFarReadingsAndFarDepthKeepsThemWithoutDisparity) {
   }
 }
 
-// FarDepth's exception: a view with fewer than FarDepthMinShared map points that a second
-// keyframe also observes keeps its far readings as disparity measurements; points seen by one
-// keyframe alone do not count, near or far.
-TEST(Frame, AViewWithFewSharedPointsKeepsItsFarReadingsAsMeasurements) {
+// FarDepth's exception: only a keyframe the depth-odometry bridge made (a pending odometry
+// parent, or its tree edge made by odometry) keeps its far readings as disparity measurements;
+// with FarDepth off every reading is one anyway.
+TEST(Frame, OnlyKeyframesTheBridgeMadeKeepTheirFarReadingsAsMeasurements) {
   OrbExtractor orb;
   RgbdCameraSettings s = settings(0);
   s.far_depth = 5.0;
-  s.far_depth_min_shared = 3;
   const auto f = near_left_far_right(s, orb);
+  std::size_t far = f->size();
+  for (std::size_t i = 0; i < f->size() && far == f->size(); ++i)
+    if (f->is_far(i)) far = i;
+  ASSERT_LT(far, f->size());
   Frame frame(0, 0.0, f);
-  KeyFrame a(1, frame), b(2, frame);
-  std::vector<std::shared_ptr<MapPoint>> points(f->size());
-  const auto add_point = [&](int i, bool shared) {
-    auto p = std::make_shared<MapPoint>(i, Eigen::Vector3d::Zero(), &a, a.id);
-    p->add_observation(&a, i);
-    if (shared) p->add_observation(&b, i);
-    points[static_cast<std::size_t>(i)] = p;
-  };
-  EXPECT_TRUE(far_kept(*f, points));  // no points at all
-  for (int i = 0; i < 20; ++i) add_point(i, false);
-  EXPECT_TRUE(far_kept(*f, points));  // 20 points, none shared
-  add_point(20, true);
-  add_point(21, true);
-  EXPECT_TRUE(far_kept(*f, points));  // 2 shared
-  add_point(22, true);
-  EXPECT_FALSE(far_kept(*f, points));  // 3 shared
-  s.far_depth_min_shared = 0;  // no exception
-  EXPECT_FALSE(far_kept(*near_left_far_right(s, orb), {}));
-  s.far_depth_min_shared = 3;
-  s.far_depth = 0;  // FarDepth off: nothing to keep
-  EXPECT_FALSE(far_kept(*near_left_far_right(s, orb), {}));
+  const auto tracked = std::make_shared<KeyFrame>(1, frame);
+  KeyFrame pending(2, frame), linked(3, frame);
+  pending.odometry_parent = tracked;
+  linked.parent_by_odometry = true;
+  EXPECT_FALSE(tracked->keeps_far_readings());
+  EXPECT_TRUE(pending.keeps_far_readings());
+  EXPECT_TRUE(linked.keeps_far_readings());
+  // What the flag does to the far keypoint's measurement: its virtual right coordinate or none.
+  EXPECT_LT(f->observation(far, tracked->keeps_far_readings()).u_right, 0);
+  EXPECT_NEAR(f->observation(far, linked.keeps_far_readings()).u_right, f->keys_un[far].pt.x - 40.0 / 7.0, 1e-4);
+  s.far_depth = 0;  // FarDepth off: nothing is far, nothing to keep
+  const auto g = near_left_far_right(s, orb);
+  KeyFrame off(4, Frame(1, 0.0, g));
+  off.parent_by_odometry = true;
+  EXPECT_FALSE(off.keeps_far_readings());
+  for (std::size_t i = 0; i < g->size(); ++i) EXPECT_FALSE(g->is_far(i));
 }
 
 TEST(Frame, WrongDepthIsIgnoredNotFatal) {

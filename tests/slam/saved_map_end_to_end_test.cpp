@@ -16,6 +16,7 @@
 #include <unistd.h>
 
 #include "../common/run_cli.hpp"
+#include "../common/scratch_dir.hpp"
 #include "eval/trajectory_error.hpp"
 #include "io/tum_dataset.hpp"
 #include "slam/key_frame.hpp"
@@ -29,18 +30,17 @@ namespace fs = std::filesystem;
 
 using testing::run_cli;
 
-// BUILTSCENE_SAVED_MAP_DIR names a folder to keep (and reuse) the generated worlds in.
+// BUILTSCENE_SAVED_MAP_DIR names a folder to keep (and reuse) the generated worlds in; without
+// it they go to a scratch folder that the process removes when it exits.
 const fs::path& work_dir() {
-  static const fs::path d = [] {
-    if (const char* keep = std::getenv("BUILTSCENE_SAVED_MAP_DIR")) {
+  if (const char* keep = std::getenv("BUILTSCENE_SAVED_MAP_DIR")) {
+    static const fs::path d = [&] {
       fs::create_directories(keep);
       return fs::path(keep);
-    }
-    const auto p = fs::temp_directory_path() / ("bs_saved_map_" + std::to_string(::getpid()));
-    fs::remove_all(p);
-    fs::create_directories(p);
-    return p;
-  }();
+    }();
+    return d;
+  }
+  static const fs::path d = testing::scratch_dir("saved_map");
   return d;
 }
 

@@ -14,6 +14,8 @@
 #include <Eigen/Geometry>
 #include <nlohmann/json.hpp>
 
+#include "../common/scratch_dir.hpp"
+
 namespace synth_test {
 
 struct JsonBox {
@@ -77,9 +79,10 @@ inline double distance_to_surfaces(const JsonScene& s, const Eigen::Vector3d& p)
   return best;
 }
 
+// An empty folder's path (the generator makes it), removed when the test process exits.
 inline std::filesystem::path temp_dir(const std::string& name) {
-  const auto dir = std::filesystem::temp_directory_path() / ("builtscene_synth_test_" + name + "_" + std::to_string(::getpid()));
-  std::filesystem::remove_all(dir);
+  const auto dir = builtscene::testing::scratch_dir("synth_test_" + name);
+  std::filesystem::remove(dir);
   return dir;
 }
 
