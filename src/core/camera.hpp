@@ -46,12 +46,11 @@ struct RgbdCameraSettings {
   double max_depth = 0.0;
   // Keypoint depth readings beyond this many metres are "far": they still place new map points,
   // but the optimizers (frame pose, local and global bundle adjustment) and the matchers'
-  // checks treat the keypoint as monocular, without the disparity residual. [FarDepth], 0 = off
-  // (the default): 5 m took the generated corridor's west leg from 3.5 % too long to 0.0 % and
-  // the 5-seed corridor median from 7.15 to 5.44 cm: docs/slam.md, "Far depth readings as
-  // measurements".
-  // Keyframes made by the depth-odometry bridge keep their far readings as measurements
-  // (KeyFrame::keeps_far_readings).
+  // checks treat the keypoint as monocular, without the disparity residual; keyframes made by
+  // the depth-odometry bridge keep them as measurements (KeyFrame::keeps_far_readings).
+  // [FarDepth], 0 = off (the default): 5 m takes the generated corridor's west leg from 3.5 %
+  // too long to 0.0 % and the 5-seed corridor median from 6.83 to 5.50 cm, but the office from
+  // 4.28 to 5.66 cm: docs/slam.md, "FarDepth's exception for bridged keyframes only".
   double far_depth = 0.0;
   bool rgb_order = true;           // Camera.RGB: 1 = images are RGB, 0 = BGR
 
