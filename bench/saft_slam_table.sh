@@ -7,6 +7,8 @@
 #   blurred-33ms the same motion with a 33 ms shutter (the longest at 30 fps)
 #   fading       generated lab-room, handheld, the light fading to 5 % (auto-gain: noise x20), seed 3
 #   kitchen      the real ../shared/data/7scenes-kitchen (first FRAMES frames; skipped when absent)
+#   NAME=DIR     any other sequence in the TUM RGB-D layout with groundtruth.txt and camera.yaml
+#                (for example the source's fr1-room=/data/tum/rgbd_dataset_freiburg1_room, converted)
 # with local mapping in its thread (as a user runs it), plus tracked frames, frames per
 # second and, for the learning modes, frames per weight update. Online learning runs in its
 # own thread, so runs differ: that is why the median. METHODS may add `checked`: continuous
@@ -36,6 +38,7 @@ dataset() {
     blurred-33ms) echo "$DATA/blurred-33ms" ;;
     fading) echo "$DATA/fading" ;;
     kitchen) echo "$PWD/../shared/data/7scenes-kitchen" ;;
+    *=*) echo "${1#*=}" ;;
   esac
 }
 make_data() {
@@ -49,11 +52,15 @@ make_data() {
     blurred-33ms) "$B" synth rgbd --scene lab-room --motion handheld --exposure-ms 33 --frames "$FRAMES" --seed 2 --out "$d" >/dev/null ;;
     fading) "$B" synth rgbd --scene lab-room --motion handheld --light-fade 0.05 --frames "$FRAMES" --seed 3 --out "$d" >/dev/null ;;
     kitchen) [ -d "$d" ] || return 1 ;;
+    *) return 1 ;;
   esac
 }
-for seq in $SEQUENCES; do
-  if ! make_data "$seq"; then echo "saft_slam_table: $seq: no data, skipped" >&2; continue; fi
-  d=$(dataset "$seq")
+NAMES=""
+for entry in $SEQUENCES; do
+  seq=${entry%%=*}
+  NAMES="$NAMES $seq"
+  if ! make_data "$entry"; then echo "saft_slam_table: $entry: no data, skipped" >&2; continue; fi
+  d=$(dataset "$entry")
   for method in $METHODS; do
     for run in $(seq 1 "$RUNS"); do
       tag="$seq-$method-$run"
@@ -74,7 +81,7 @@ for seq in $SEQUENCES; do
     done
   done
 done
-python3 - "$OUT" "$RUNS" "$FRAMES" "$SEQUENCES" "$METHODS" <<'PY'
+python3 - "$OUT" "$RUNS" "$FRAMES" "$NAMES" "$METHODS" <<'PY'
 import json, os, statistics, sys
 out, runs, frames = sys.argv[1], int(sys.argv[2]), int(sys.argv[3])
 seqs, methods = sys.argv[4].split(), sys.argv[5].split()
