@@ -13,7 +13,6 @@
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
-#include <unistd.h>
 
 #include "../common/run_cli.hpp"
 #include "../common/scratch_dir.hpp"

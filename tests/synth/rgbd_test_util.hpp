@@ -8,8 +8,6 @@
 #include <string>
 #include <vector>
 
-#include <unistd.h>
-
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <nlohmann/json.hpp>
@@ -79,11 +77,7 @@ inline double distance_to_surfaces(const JsonScene& s, const Eigen::Vector3d& p)
   return best;
 }
 
-// An empty folder's path (the generator makes it), removed when the test process exits.
-inline std::filesystem::path temp_dir(const std::string& name) {
-  const auto dir = builtscene::testing::scratch_dir("synth_test_" + name);
-  std::filesystem::remove(dir);
-  return dir;
-}
+// An empty folder for a generated sequence, removed when the test process exits.
+inline std::filesystem::path temp_dir(const std::string& name) { return builtscene::testing::scratch_dir("synth_test_" + name); }
 
 }  // namespace synth_test
