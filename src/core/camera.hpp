@@ -38,6 +38,16 @@ struct RgbdCameraSettings {
   // pixel noise. 0 = ORB-SLAM's virtual right coordinate with the keypoint's pyramid sigma.
   // [DisparitySigma]; see docs/slam.md, "Depth weight".
   double disparity_sigma = 0.2;
+  // The same in global bundle adjustment (after a loop closure), where every point is
+  // estimated anew from all its readings: there it can be the sensor's own disparity noise (the
+  // generated Kinect's is ~0.07-0.08 px at every range), while tracking and local BA keep
+  // DisparitySigma, which also covers the error of map points that are held fixed or seen by
+  // few keyframes. [GlobalBADisparitySigma], pixels; 0 = DisparitySigma (the default).
+  // Ignored when DisparitySigma is 0 (ORB-SLAM's form). Off by default (docs/slam.md, "Where
+  // the corridor's straights get too long"): 0.1 took the generated corridor's 5-seed median
+  // from 6.83 to 5.29 cm and its markers from 9 to 12 of 15 tags within 5 cm, but one of three
+  // generated offices from 4.0 to 12.2 cm.
+  double global_ba_disparity_sigma = 0.0;
   // Keypoint depth readings beyond this many metres are not used: such keypoints are treated
   // as having no depth (triangulated like a monocular camera's). A structured-light sensor's
   // depth error grows as depth^2 and its disparity steps reach ~10 cm at 6 m. [MaxDepth],

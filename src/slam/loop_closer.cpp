@@ -470,7 +470,7 @@ void LoopCloser::run_global_ba(long loop, long keyframe, long matched) {
     std::lock_guard lock(map_.mutex());
     const auto all = map_.keyframes();
     if (all.empty()) return;
-    pb.K = intrinsics_of(*all.front()->f->ctx);
+    pb.K = global_ba_intrinsics_of(*all.front()->f->ctx);
     // Keyframes local mapping has not linked yet are left to follow their parent later, and so
     // are keyframes sharing (almost) no point with the others (made on the depth-odometry
     // bridge): with no measurement to hold them, they would stay behind while the rest moves.

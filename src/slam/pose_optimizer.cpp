@@ -29,6 +29,12 @@ Intrinsics intrinsics_of(const FrameContext& ctx) {
   return {ctx.camera.fx, ctx.camera.fy, ctx.camera.cx, ctx.camera.cy, ctx.bf, ctx.disparity_sigma};
 }
 
+Intrinsics global_ba_intrinsics_of(const FrameContext& ctx) {
+  Intrinsics K = intrinsics_of(ctx);
+  if (K.disparity_sigma > 0 && ctx.global_ba_disparity_sigma > 0) K.disparity_sigma = ctx.global_ba_disparity_sigma;
+  return K;
+}
+
 namespace {
 
 // r = S [log(R R0^T); t - R R0^T t0]: the pose relative to the prior, S its square-root

@@ -1,6 +1,8 @@
 // Motion-only BA recovers a known pose from noisy 3D-2D / 3D-stereo matches with 30 % outliers.
 #include <gtest/gtest.h>
 
+#include "core/camera.hpp"
+#include "slam/frame.hpp"
 #include "slam/pose_optimizer.hpp"
 #include "synthetic_scene.hpp"
 
@@ -92,6 +94,27 @@ TEST(PoseOptimizer, DisparityResidualIsWeightedByItsOwnSigma) {
   o.inv_sigma2 = 0.5;
   o.u_right = o.uv.x() - K.bf / pc.z();
   EXPECT_NEAR(reprojection_chi2(K, o, pc), 1.5 * 1.5 * 0.5, 1e-9);
+}
+
+// Global bundle adjustment weighs a depth reading by GlobalBADisparitySigma, tracking and
+// local BA by DisparitySigma; 0 falls back to DisparitySigma, and ORB-SLAM's form
+// (DisparitySigma 0) stays ORB-SLAM's form in both.
+TEST(PoseOptimizer, GlobalBundleAdjustmentTakesItsOwnDisparitySigma) {
+  RgbdCameraSettings s;
+  s.camera.fx = s.camera.fy = 525;
+  s.camera.cx = 319.5;
+  s.camera.cy = 239.5;
+  struct Row {
+    double tracking, ba, expect_tracking, expect_ba;
+  };
+  for (const Row& r : {Row{0.2, 0.1, 0.2, 0.1}, Row{0.2, 0.0, 0.2, 0.2}, Row{0.0, 0.1, 0.0, 0.0}}) {
+    s.disparity_sigma = r.tracking;
+    s.global_ba_disparity_sigma = r.ba;
+    const auto ctx = FrameContext::make(s, ScalePyramid::make(1.2f, 8), DescriptorMetric::orb());
+    EXPECT_DOUBLE_EQ(intrinsics_of(*ctx).disparity_sigma, r.expect_tracking);
+    EXPECT_DOUBLE_EQ(global_ba_intrinsics_of(*ctx).disparity_sigma, r.expect_ba);
+    EXPECT_DOUBLE_EQ(global_ba_intrinsics_of(*ctx).fx, 525);
+  }
 }
 
 TEST(PoseOptimizer, TooFewMatchesLeavesPoseUntouched) {
