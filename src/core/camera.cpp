@@ -72,6 +72,7 @@ RgbdCameraSettings load_camera_settings(const std::filesystem::path& path) {
   s.depth_map_factor = f.get_double("DepthMapFactor", 5000.0);
   s.disparity_sigma = f.get_double("DisparitySigma", s.disparity_sigma);
   s.global_ba_disparity_sigma = f.get_double("GlobalBADisparitySigma", s.global_ba_disparity_sigma);
+  s.local_ba_disparity_sigma = f.get_double("LocalBADisparitySigma", s.local_ba_disparity_sigma);
   s.max_depth = f.get_double("MaxDepth", s.max_depth);
   s.far_depth = f.get_double("FarDepth", s.far_depth);
   if (c.fx <= 0 || c.fy <= 0) throw_input_error(path, 0, "Camera.fx and Camera.fy must be positive");
@@ -84,6 +85,7 @@ RgbdCameraSettings load_camera_settings(const std::filesystem::path& path) {
   };
   require_finite_non_negative(s.disparity_sigma, "DisparitySigma", "pixels; 0 = ORB-SLAM's weighting");
   require_finite_non_negative(s.global_ba_disparity_sigma, "GlobalBADisparitySigma", "pixels; 0 = DisparitySigma");
+  require_finite_non_negative(s.local_ba_disparity_sigma, "LocalBADisparitySigma", "pixels; 0 = DisparitySigma");
   require_finite_non_negative(s.max_depth, "MaxDepth", "metres; 0 = no limit");
   require_finite_non_negative(s.far_depth, "FarDepth", "metres; 0 = every reading is a measurement");
   return s;
@@ -99,6 +101,7 @@ void save_camera_settings(const std::filesystem::path& path, const RgbdCameraSet
       << "\nCamera.fps: " << s.fps << "\nCamera.bf: " << s.bf << "\nCamera.RGB: " << (s.rgb_order ? 1 : 0)
       << "\nThDepth: " << s.th_depth << "\nDepthMapFactor: " << s.depth_map_factor
       << "\nDisparitySigma: " << s.disparity_sigma << "\nGlobalBADisparitySigma: " << s.global_ba_disparity_sigma
+      << "\nLocalBADisparitySigma: " << s.local_ba_disparity_sigma
       << "\nMaxDepth: " << s.max_depth
       << "\nFarDepth: " << s.far_depth << "\n";
   if (!out) throw Failure(located(path, 0, "cannot write camera settings"));

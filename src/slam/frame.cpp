@@ -17,6 +17,7 @@ std::shared_ptr<const FrameContext> FrameContext::make(const RgbdCameraSettings&
   c->th_depth = s.close_depth();
   c->disparity_sigma = s.disparity_sigma;
   c->global_ba_disparity_sigma = s.global_ba_disparity_sigma;
+  c->local_ba_disparity_sigma = s.local_ba_disparity_sigma;
   c->max_depth = s.max_depth;
   c->far_depth = s.far_depth;
   c->pyramid = pyramid;

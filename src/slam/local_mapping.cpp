@@ -409,7 +409,7 @@ void LocalMapping::local_bundle_adjustment(KeyFrame& kf) {
   {
     std::lock_guard lock(map_.mutex());
     if (kf.bad) return;
-    pb.K = intrinsics_of(*kf.f->ctx);
+    pb.K = local_ba_intrinsics_of(*kf.f->ctx);
     std::unordered_map<KeyFrame*, int> cam_index;
     std::vector<char> keep_far;  // per camera: KeyFrame::keeps_far_readings
     auto add_cam = [&](KeyFrame* k, bool fixed) {

@@ -29,10 +29,19 @@ Intrinsics intrinsics_of(const FrameContext& ctx) {
   return {ctx.camera.fx, ctx.camera.fy, ctx.camera.cx, ctx.camera.cy, ctx.bf, ctx.disparity_sigma};
 }
 
-Intrinsics global_ba_intrinsics_of(const FrameContext& ctx) {
-  Intrinsics K = intrinsics_of(ctx);
-  if (K.disparity_sigma > 0 && ctx.global_ba_disparity_sigma > 0) K.disparity_sigma = ctx.global_ba_disparity_sigma;
+namespace {
+Intrinsics with_disparity_sigma(Intrinsics K, double sigma) {
+  if (K.disparity_sigma > 0 && sigma > 0) K.disparity_sigma = sigma;  // ORB-SLAM's form stays
   return K;
+}
+}  // namespace
+
+Intrinsics global_ba_intrinsics_of(const FrameContext& ctx) {
+  return with_disparity_sigma(intrinsics_of(ctx), ctx.global_ba_disparity_sigma);
+}
+
+Intrinsics local_ba_intrinsics_of(const FrameContext& ctx) {
+  return with_disparity_sigma(intrinsics_of(ctx), ctx.local_ba_disparity_sigma);
 }
 
 namespace {

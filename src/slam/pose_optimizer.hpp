@@ -52,8 +52,9 @@ PoseOptimizationResult optimize_pose(const SE3& T_cw_initial, const std::vector<
 int optimize_frame_pose(Frame& frame, const PoseOptimizerOptions& options = {});
 
 Intrinsics intrinsics_of(const struct FrameContext& ctx);
-// The same with global bundle adjustment's disparity weight
-// (RgbdCameraSettings::global_ba_disparity_sigma).
+// The same with global / local bundle adjustment's disparity weight
+// (RgbdCameraSettings::global_ba_disparity_sigma, local_ba_disparity_sigma).
 Intrinsics global_ba_intrinsics_of(const struct FrameContext& ctx);
+Intrinsics local_ba_intrinsics_of(const struct FrameContext& ctx);
 
 }  // namespace builtscene::slam

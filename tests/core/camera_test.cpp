@@ -77,7 +77,7 @@ TEST(CameraSettings, ReadsOrbSlamYamlWithOpenCvDirective) {
                             "%YAML:1.0\nCamera.fx: 500.0\nCamera.fy: 501.0\nCamera.cx: 320\nCamera.cy: 240\n"
                             "Camera.k1: 0.1\nCamera.width: 640\nCamera.height: 480\nCamera.bf: 40.0\n"
                             "DepthMapFactor: 1000.0\nMaxDepth: 4.5\nDisparitySigma: 0.35\nFarDepth: 6.5\n"
-                            "GlobalBADisparitySigma: 0.12\n");
+                            "GlobalBADisparitySigma: 0.12\nLocalBADisparitySigma: 0.13\n");
   const auto s = load_camera_settings(p);
   EXPECT_DOUBLE_EQ(s.max_depth, 4.5);
   EXPECT_DOUBLE_EQ(s.camera.fx, 500.0);
@@ -95,6 +95,7 @@ TEST(CameraSettings, ReadsOrbSlamYamlWithOpenCvDirective) {
   EXPECT_DOUBLE_EQ(s2.disparity_sigma, 0.35);
   EXPECT_DOUBLE_EQ(s2.far_depth, 6.5);
   EXPECT_DOUBLE_EQ(s2.global_ba_disparity_sigma, 0.12);
+  EXPECT_DOUBLE_EQ(s2.local_ba_disparity_sigma, 0.13);
 }
 
 // The error of loading `path` names every one of `parts` (file, line, key).
@@ -118,6 +119,9 @@ TEST(CameraSettings, BadFilesNameFileAndField) {
   expect_error_naming(
       write_temp("bs_cam_basigma.yaml", "Camera.fx: 500\nCamera.fy: 500\nCamera.cx: 1\nCamera.cy: 2\nGlobalBADisparitySigma: -1\n"),
       {"bs_cam_basigma.yaml", "GlobalBADisparitySigma"});
+  expect_error_naming(
+      write_temp("bs_cam_lbasigma.yaml", "Camera.fx: 500\nCamera.fy: 500\nCamera.cx: 1\nCamera.cy: 2\nLocalBADisparitySigma: -1\n"),
+      {"bs_cam_lbasigma.yaml", "LocalBADisparitySigma"});
   expect_error_naming(
       write_temp("bs_cam_maxdepth.yaml", "Camera.fx: 500\nCamera.fy: 500\nCamera.cx: 1\nCamera.cy: 2\nMaxDepth: -1\n"),
       {"bs_cam_maxdepth.yaml", "MaxDepth"});

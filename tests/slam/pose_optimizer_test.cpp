@@ -96,24 +96,27 @@ TEST(PoseOptimizer, DisparityResidualIsWeightedByItsOwnSigma) {
   EXPECT_NEAR(reprojection_chi2(K, o, pc), 1.5 * 1.5 * 0.5, 1e-9);
 }
 
-// Global bundle adjustment weighs a depth reading by GlobalBADisparitySigma, tracking and
-// local BA by DisparitySigma; 0 falls back to DisparitySigma, and ORB-SLAM's form
-// (DisparitySigma 0) stays ORB-SLAM's form in both.
-TEST(PoseOptimizer, GlobalBundleAdjustmentTakesItsOwnDisparitySigma) {
+// Global and local bundle adjustment weigh a depth reading by GlobalBADisparitySigma and
+// LocalBADisparitySigma, tracking by DisparitySigma; 0 falls back to DisparitySigma, and
+// ORB-SLAM's form (DisparitySigma 0) stays ORB-SLAM's form everywhere.
+TEST(PoseOptimizer, BundleAdjustmentsTakeTheirOwnDisparitySigma) {
   RgbdCameraSettings s;
   s.camera.fx = s.camera.fy = 525;
   s.camera.cx = 319.5;
   s.camera.cy = 239.5;
   struct Row {
-    double tracking, ba, expect_tracking, expect_ba;
+    double tracking, global, local, expect_tracking, expect_global, expect_local;
   };
-  for (const Row& r : {Row{0.2, 0.1, 0.2, 0.1}, Row{0.2, 0.0, 0.2, 0.2}, Row{0.0, 0.1, 0.0, 0.0}}) {
+  for (const Row& r : {Row{0.2, 0.1, 0.15, 0.2, 0.1, 0.15}, Row{0.2, 0.0, 0.0, 0.2, 0.2, 0.2},
+                       Row{0.2, 0.0, 0.1, 0.2, 0.2, 0.1}, Row{0.0, 0.1, 0.1, 0.0, 0.0, 0.0}}) {
     s.disparity_sigma = r.tracking;
-    s.global_ba_disparity_sigma = r.ba;
+    s.global_ba_disparity_sigma = r.global;
+    s.local_ba_disparity_sigma = r.local;
     const auto ctx = FrameContext::make(s, ScalePyramid::make(1.2f, 8), DescriptorMetric::orb());
     EXPECT_DOUBLE_EQ(intrinsics_of(*ctx).disparity_sigma, r.expect_tracking);
-    EXPECT_DOUBLE_EQ(global_ba_intrinsics_of(*ctx).disparity_sigma, r.expect_ba);
-    EXPECT_DOUBLE_EQ(global_ba_intrinsics_of(*ctx).fx, 525);
+    EXPECT_DOUBLE_EQ(global_ba_intrinsics_of(*ctx).disparity_sigma, r.expect_global);
+    EXPECT_DOUBLE_EQ(local_ba_intrinsics_of(*ctx).disparity_sigma, r.expect_local);
+    EXPECT_DOUBLE_EQ(local_ba_intrinsics_of(*ctx).fx, 525);
   }
 }
 
