@@ -40,9 +40,9 @@ struct RgbdCameraSettings {
   double disparity_sigma = 0.2;
   // The same in global bundle adjustment (after a loop closure), where every point is
   // estimated anew from all its readings: there it can be the sensor's own disparity noise (the
-  // generated Kinect's is ~0.07-0.08 px at every range), while tracking and local BA keep
-  // DisparitySigma, which also covers the error of map points that are held fixed or seen by
-  // few keyframes. [GlobalBADisparitySigma], pixels; 0 = DisparitySigma (the default).
+  // generated Kinect's is ~0.07-0.08 px at every range), while frame tracking keeps
+  // DisparitySigma, which also covers the error of the map points it holds fixed.
+  // [GlobalBADisparitySigma], pixels; 0 = DisparitySigma (the default).
   // Ignored when DisparitySigma is 0 (ORB-SLAM's form). Off by default (docs/slam.md, "Where
   // the corridor's straights get too long"): 0.1 took the generated corridor's 5-seed median
   // from 6.83 to 5.29 cm and its markers from 9 to 12 of 15 tags within 5 cm, but one of three
