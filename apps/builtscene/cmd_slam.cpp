@@ -50,6 +50,7 @@ struct SlamOptions {
   int depth_prior_below = slam::TrackingOptions{}.depth_prior_below_inliers;
   int bridge_local_map = -1;  // --bridge-local-map
   int global_ba_iterations = slam::LoopClosingOptions{}.global_ba_iterations;
+  bool no_final_ba = false;
   double bridge_link_cm = slam::BridgeLinkOptions{}.sigma_m * 100.0;
   double bridge_link_deg = slam::BridgeLinkOptions{}.sigma_deg;
   double min_parallax_sigmas = slam::LocalMappingOptions{}.min_parallax_sigmas;
@@ -103,6 +104,7 @@ nlohmann::json run_slam(const SlamOptions& opt) {
   so.tracking.depth_prior_below_inliers = opt.depth_prior_below;
   so.tracking.bridge_local_map_inliers = opt.bridge_local_map;
   so.loop.global_ba_iterations = opt.global_ba_iterations;
+  so.loop.final_bundle_adjustment = !opt.no_final_ba;
   so.loop.bridge_links.sigma_m = opt.bridge_link_cm / 100.0;
   so.loop.bridge_links.sigma_deg = opt.bridge_link_deg;
   so.mapping.min_parallax_sigmas = opt.min_parallax_sigmas;
@@ -258,6 +260,9 @@ nlohmann::json run_slam(const SlamOptions& opt) {
         {"points_fused", lc.points_fused},
         {"planes_merged", lc.planes_merged},
         {"global_ba_runs", lc.global_ba_runs},
+        {"final_ba_runs", lc.final_ba_runs},
+        {"final_ba_disparity_sigma", lc.final_ba_disparity_sigma},
+        {"final_ba_measured_disparity_sigma", lc.final_ba_measured_disparity_sigma},
         {"global_ba_aborted", lc.global_ba_aborted},
         {"global_ba_merged", lc.global_ba_merged},
         {"max_pose_graph_parts", lc.max_pose_graph_parts}}},
@@ -376,6 +381,9 @@ const bool registered_slam = register_command({
                      "two phases (robust, then after removing outliers)")
           ->capture_default_str()
           ->check(CLI::Range(1, 1000));
+      cmd.add_flag("--no-final-ba", opt->no_final_ba,
+                   "Skip the final bundle adjustment a run that closed a loop ends with (the depth readings weighed "
+                   "by the disparity noise the map shows; docs/slam.md, \"The final bundle adjustment\")");
       cmd.add_option("--bridge-link-cm", opt->bridge_link_cm,
                      "Global BA holds the pose between the keyframes either side of a stretch the depth odometry "
                      "carried (a featureless turn) to its value after the pose graph, with this standard deviation "

@@ -10,6 +10,7 @@
 #include "core/logging.hpp"
 #include "features/bow_vector.hpp"
 #include "slam/bow_matcher.hpp"
+#include "slam/disparity_noise.hpp"
 #include "slam/key_frame.hpp"
 #include "slam/keyframe_database.hpp"
 #include "slam/local_bundle_adjuster.hpp"
@@ -103,6 +104,20 @@ void LoopCloser::finish() {
   run_pending();
   // The global BA of the last loop is worth waiting for: it is the best map there will be.
   if (gba_thread_.joinable()) gba_thread_.join();
+}
+
+void LoopCloser::refine_map() {
+  if (refined_ || !opt_.final_bundle_adjustment || !opt_.global_bundle_adjustment) return;
+  refined_ = true;
+  const long loops = stats().loops;
+  if (loops == 0) return;  // nothing has tied the map together; local BA already did its part
+  long newest = -1;
+  {
+    std::lock_guard lock(map_.mutex());
+    for (const auto& k : map_.keyframes())
+      if (!k->bad) newest = std::max(newest, k->id);
+  }
+  run_global_ba(loops, newest, -1, /*final_pass=*/true);
 }
 
 void LoopCloser::run() {
@@ -458,7 +473,7 @@ void LoopCloser::correct(const std::shared_ptr<KeyFrame>& kf, const LoopMatch& m
   else run_global_ba(loop, keyframe, matched);
 }
 
-void LoopCloser::run_global_ba(long loop, long keyframe, long matched) {
+void LoopCloser::run_global_ba(long loop, long keyframe, long matched, bool final_pass) {
   const auto start = std::chrono::steady_clock::now();
   BundleAdjustmentProblem pb;
   pb.planar = opt_.planar;
@@ -466,6 +481,7 @@ void LoopCloser::run_global_ba(long loop, long keyframe, long matched) {
   std::vector<std::shared_ptr<MapPoint>> pts;
   std::vector<std::shared_ptr<MapPlane>> planes;
   int gba_planes_merged = 0, bridge_links = 0;
+  DisparityNoise noise;
   {
     std::lock_guard lock(map_.mutex());
     const auto all = map_.keyframes();
@@ -518,17 +534,29 @@ void LoopCloser::run_global_ba(long loop, long keyframe, long matched) {
         pb.measurements.push_back(meas);
       }
     }
+    if (final_pass && pb.K.disparity_sigma > 0) {
+      noise = estimate_disparity_noise(pb);
+      if (noise.sigma > 0)
+        pb.K.disparity_sigma = std::clamp(noise.sigma, opt_.final_ba_min_disparity_sigma,
+                                          std::max(pb.K.disparity_sigma, opt_.final_ba_min_disparity_sigma));
+    }
     add_depth_links(cams, pb);  // TrackingOptions::depth_links
     bridge_links = add_bridge_links(cams, opt_.bridge_links, pb);
     planes = add_plane_terms(cams, pb, opt_.planes, 0, /*hold_groups_as_a_whole=*/true);
   }
   {
     std::lock_guard s(stats_mutex_);
-    ++stats_.global_ba_runs;
+    if (final_pass) {
+      ++stats_.final_ba_runs;
+      stats_.final_ba_disparity_sigma = pb.K.disparity_sigma;
+      stats_.final_ba_measured_disparity_sigma = noise.sigma;
+    } else {
+      ++stats_.global_ba_runs;
+    }
   }
   BundleAdjustmentOptions bo;
-  bo.first_iterations = opt_.global_ba_iterations;
-  bo.second_iterations = opt_.global_ba_iterations;
+  bo.first_iterations = final_pass ? opt_.final_ba_iterations : opt_.global_ba_iterations;
+  bo.second_iterations = bo.first_iterations;
   const auto r = solve_bundle_adjustment(pb, bo, &abort_gba_);
   if (r.aborted || !r.solved) {
     std::lock_guard s(stats_mutex_);
@@ -570,7 +598,7 @@ void LoopCloser::run_global_ba(long loop, long keyframe, long matched) {
     }
     store_solved_planes(planes, r.planes);
     if (opt_.planes.enabled) gba_planes_merged = refit_and_merge_planes(map_, opt_.planes, /*refit=*/false);
-    event.stage = LoopEvent::Stage::kGlobalBundleAdjustment;
+    event.stage = final_pass ? LoopEvent::Stage::kFinalBundleAdjustment : LoopEvent::Stage::kGlobalBundleAdjustment;
     event.loop = loop;
     event.keyframe = keyframe;
     event.matched_keyframe = matched;
@@ -584,12 +612,17 @@ void LoopCloser::run_global_ba(long loop, long keyframe, long matched) {
   if (mapping_) mapping_->resume();
   {
     std::lock_guard s(stats_mutex_);
-    ++stats_.global_ba_merged;
+    if (!final_pass) ++stats_.global_ba_merged;
     stats_.planes_merged += gba_planes_merged;
   }
-  add_time("global_ba", start);
-  spdlog::info("global BA after loop {} merged: {} keyframes, {} points, {} bridge links, RMS {:.2f} -> {:.2f} px", loop,
-               cams.size(), pts.size(), bridge_links, r.initial_rms_px, r.final_rms_px);
+  add_time(final_pass ? "final_ba" : "global_ba", start);
+  if (final_pass)
+    spdlog::info("final BA merged: {} keyframes, {} points, disparity sigma {:.3f} px (measured {:.3f} px over {} readings), "
+                 "RMS {:.2f} -> {:.2f} px",
+                 cams.size(), pts.size(), pb.K.disparity_sigma, noise.sigma, noise.readings, r.initial_rms_px, r.final_rms_px);
+  else
+    spdlog::info("global BA after loop {} merged: {} keyframes, {} points, {} bridge links, RMS {:.2f} -> {:.2f} px", loop,
+                 cams.size(), pts.size(), bridge_links, r.initial_rms_px, r.final_rms_px);
   emit(event);
 }
 

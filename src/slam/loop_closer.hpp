@@ -91,6 +91,15 @@ struct LoopClosingOptions {
   bool global_bundle_adjustment = true;
   int global_ba_iterations = 10;  // Ceres iterations (robust phase; as many after outlier classification)
   int global_ba_min_shared_points = 10;  // fewer: the keyframe follows its parent instead
+  // After the run (refine_map, from System::shutdown), when a loop was closed: one more global
+  // bundle adjustment over the whole map, the depth readings weighed (and judged in its
+  // outlier test) by the disparity noise the map's own readings show (disparity_noise.hpp),
+  // never looser than the global BA's sigma nor tighter than final_ba_min_disparity_sigma
+  // (pixels). Ends a run, so it cannot change which loops close. docs/slam.md, "The final
+  // bundle adjustment".
+  bool final_bundle_adjustment = true;
+  int final_ba_iterations = 20;  // in each of its two phases
+  double final_ba_min_disparity_sigma = 0.02;
   // Relative-pose terms across stretches the depth-odometry bridge carried (bridge_links.hpp).
   BridgeLinkOptions bridge_links;
 };
@@ -119,6 +128,9 @@ class LoopCloser {
   void run_pending();
   // Processes what is queued, waits for a running global BA, stops the threads.
   void finish();
+  // After finish(): the final bundle adjustment (LoopClosingOptions::final_bundle_adjustment)
+  // when this run closed a loop; once. Sends a kFinalBundleAdjustment event.
+  void refine_map();
 
   struct Stats {
     long keyframes_checked = 0;
@@ -130,6 +142,10 @@ class LoopCloser {
     long points_fused = 0;
     long planes_merged = 0;  // plane landmarks joined after corrections (refit_and_merge_planes)
     long global_ba_runs = 0, global_ba_aborted = 0, global_ba_merged = 0;
+    // The final bundle adjustment (refine_map): 1 when it ran, and the disparity sigma it used
+    // (pixels) with the robust spread it measured (0 when it did not run).
+    long final_ba_runs = 0;
+    double final_ba_disparity_sigma = 0, final_ba_measured_disparity_sigma = 0;
     // The most connected parts any loop's essential graph fell into: 1 when every keyframe is
     // tied to the rest (a part no edge joins would move rigidly and leave a step).
     long max_pose_graph_parts = 0;
@@ -144,6 +160,7 @@ class LoopCloser {
   LocalMapping* mapping_;
   LoopClosingOptions opt_;
   bool threaded_;
+  bool refined_ = false;
   StageTimer* timer_;
   EventSink sink_;
 
@@ -170,7 +187,8 @@ class LoopCloser {
   std::unique_ptr<LoopMatch> verify(KeyFrame& kf, KeyFrame& candidate);
   void correct(const std::shared_ptr<KeyFrame>& kf, const LoopMatch& match);
   void stop_global_ba();
-  void run_global_ba(long loop, long keyframe, long matched);
+  // final_pass: refine_map's adjustment (its own sigma and iterations, its own event).
+  void run_global_ba(long loop, long keyframe, long matched, bool final_pass = false);
   void emit(const LoopEvent& e) const;
   void add_time(const char* stage, std::chrono::steady_clock::time_point start) const;
 };

@@ -1,6 +1,7 @@
 #pragma once
 // What loop closing tells the rest of the system (System::subscribe_loop_events): a loop was
-// closed, or the global bundle adjustment that follows a loop has been merged into the map.
+// closed, or the global bundle adjustment that follows a loop (or the one that ends a run) has
+// been merged into the map.
 // Either way every keyframe pose may have moved, so consumers that hold keyframe poses (the
 // occupancy grid) rebuild from `keyframes`.
 #include <vector>
@@ -12,7 +13,8 @@ namespace builtscene::slam {
 struct LoopEvent {
   enum class Stage {
     kPoseGraph,             // the loop corrected, points fused, essential graph optimized
-    kGlobalBundleAdjustment // the global BA started by that loop finished and was merged
+    kGlobalBundleAdjustment, // the global BA started by that loop finished and was merged
+    kFinalBundleAdjustment   // the run's final bundle adjustment (LoopCloser::refine_map) was merged
   };
   Stage stage = Stage::kPoseGraph;
   long loop = 0;              // 1-based count of closed loops this event belongs to

@@ -175,8 +175,12 @@ void System::shutdown() {
   if (learning_) learning_->finish();
   mapping_->run_pending();
   mapping_->finish();
-  // After local mapping: its last keyframes still go through loop detection.
-  if (loop_closer_) loop_closer_->finish();
+  // After local mapping: its last keyframes still go through loop detection; then the final
+  // bundle adjustment (when a loop was closed) leaves the best map the run can give.
+  if (loop_closer_) {
+    loop_closer_->finish();
+    loop_closer_->refine_map();
+  }
 }
 
 void System::on_loop_event(const LoopEvent& event) {

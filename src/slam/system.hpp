@@ -96,7 +96,8 @@ class System {
   // (CV_32F, 0 = none; an empty or mismatched depth image is treated as no depth).
   TrackingOutcome track_rgbd(const cv::Mat& image, const cv::Mat& depth_m, double timestamp);
 
-  // Lets local mapping finish its queue and stops it. Idempotent.
+  // Lets local mapping finish its queue and stops it, then loop closing (with its final bundle
+  // adjustment when the run closed a loop: LoopCloser::refine_map). Idempotent.
   void shutdown();
 
   // Replaces the (empty) map by a saved one; tracking then relocalizes. Only before the first

@@ -1,0 +1,28 @@
+#include "slam/disparity_noise.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+namespace builtscene::slam {
+
+DisparityNoise estimate_disparity_noise(const BundleAdjustmentProblem& pb, int min_readings) {
+  std::vector<double> residuals;
+  for (const auto& m : pb.measurements) {
+    if (!m.o.stereo()) continue;
+    const auto c = static_cast<std::size_t>(m.camera), p = static_cast<std::size_t>(m.point);
+    if (c >= pb.cameras.size() || p >= pb.points.size()) continue;
+    const Eigen::Vector3d pc = pb.cameras[c].T_cw * pb.points[p];
+    if (!(pc.z() > 1e-6)) continue;
+    residuals.push_back(std::abs(pb.K.bf / pc.z() - (m.o.uv.x() - m.o.u_right)));
+  }
+  DisparityNoise out;
+  out.readings = static_cast<int>(residuals.size());
+  if (out.readings < std::max(min_readings, 1)) return out;
+  const auto mid = residuals.begin() + static_cast<std::ptrdiff_t>(residuals.size() / 2);
+  std::nth_element(residuals.begin(), mid, residuals.end());
+  out.sigma = 1.4826 * *mid;
+  return out;
+}
+
+}  // namespace builtscene::slam
