@@ -14,7 +14,7 @@ DisparityNoise estimate_disparity_noise(const BundleAdjustmentProblem& pb, int m
     if (c >= pb.cameras.size() || p >= pb.points.size()) continue;
     const Eigen::Vector3d pc = pb.cameras[c].T_cw * pb.points[p];
     if (!(pc.z() > 1e-6)) continue;
-    residuals.push_back(std::abs(pb.K.bf / pc.z() - (m.o.uv.x() - m.o.u_right)));
+    residuals.push_back(std::abs(disparity_residual(pb.K, m.o, pc)));
   }
   DisparityNoise out;
   out.readings = static_cast<int>(residuals.size());

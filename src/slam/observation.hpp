@@ -23,6 +23,12 @@ struct Observation {
   bool stereo() const { return u_right >= 0; }
 };
 
+// A stereo observation's disparity residual in pixels, without weight: the disparity p_c
+// predicts (bf / z) minus the reading's (u - u_right). p_c must be in front of the camera.
+inline double disparity_residual(const Intrinsics& K, const Observation& o, const Eigen::Vector3d& p_c) {
+  return K.bf * (1.0 / p_c.z()) - (o.uv.x() - o.u_right);
+}
+
 // ORB-SLAM's chi-square thresholds at 95 %: 2 and 3 degrees of freedom.
 constexpr double kChi2Mono = 5.991;
 constexpr double kChi2Stereo = 7.815;

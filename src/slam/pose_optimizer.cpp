@@ -15,7 +15,7 @@ double reprojection_chi2(const Intrinsics& K, const Observation& o, const Eigen:
   const double u = K.fx * p_c.x() * inv_z + K.cx, v = K.fy * p_c.y() * inv_z + K.cy;
   double e = (u - o.uv.x()) * (u - o.uv.x()) + (v - o.uv.y()) * (v - o.uv.y());
   if (o.stereo() && K.disparity_sigma > 0) {
-    const double ed = (K.bf * inv_z - (o.uv.x() - o.u_right)) / K.disparity_sigma;
+    const double ed = disparity_residual(K, o, p_c) / K.disparity_sigma;
     return e * o.inv_sigma2 + ed * ed;
   }
   if (o.stereo()) {
