@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 
 #include "../common/run_cli.hpp"
+#include "../common/scratch_dir.hpp"
 
 namespace builtscene {
 namespace {
@@ -17,9 +18,10 @@ using testing::line_count;
 using testing::run_cli;
 using testing::shell_quote;
 
+// One folder bs_cli_<pid> for the whole process (made once: scratch_dir empties it), removed
+// when the test process exits.
 fs::path fixture_dir() {
-  const auto d = fs::temp_directory_path() / "bs_cli";
-  fs::create_directories(d);
+  static const fs::path d = testing::scratch_dir("cli");
   return d;
 }
 

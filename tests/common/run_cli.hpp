@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <array>
+#include <atomic>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -27,7 +28,8 @@ inline std::string shell_quote(const std::string& s) {
 
 // Runs a shell command line; stdout and stderr captured separately.
 inline CliResult run_cli_command(const std::string& command_line) {
-  static int counter = 0;
+  // pid + call number: unique per process and per call (atomic: calls may come from threads).
+  static std::atomic<unsigned> counter{0};
   const auto err_file = std::filesystem::temp_directory_path() /
                         ("builtscene_test_stderr_" + std::to_string(::getpid()) + "_" + std::to_string(counter++));
   const std::string cmd = command_line + " 2>" + shell_quote(err_file.string());

@@ -8,6 +8,7 @@
 
 #include <opencv2/calib3d.hpp>
 
+#include "../common/scratch_dir.hpp"
 #include "core/camera.hpp"
 #include "core/errors.hpp"
 
@@ -66,8 +67,15 @@ TEST(PinholeCamera, UndistortPixelMatchesOpenCv) {
   }
 }
 
+// The files keep their names (the error checks look for them) inside one folder bs_cam_<pid>,
+// made once per process (scratch_dir empties it) and removed when the process exits.
+const std::filesystem::path& cam_dir() {
+  static const std::filesystem::path d = testing::scratch_dir("cam");
+  return d;
+}
+
 std::filesystem::path write_temp(const std::string& name, const std::string& text) {
-  const auto p = std::filesystem::temp_directory_path() / name;
+  const auto p = cam_dir() / name;
   std::ofstream(p) << text;
   return p;
 }
@@ -86,7 +94,7 @@ TEST(CameraSettings, ReadsOrbSlamYamlWithOpenCvDirective) {
   EXPECT_DOUBLE_EQ(s.depth_map_factor, 1000.0);
   EXPECT_DOUBLE_EQ(s.close_depth(), 40.0 * 40.0 / 500.0);
   // Round trip through the writer.
-  const auto q = std::filesystem::temp_directory_path() / "bs_cam_rt.yaml";
+  const auto q = cam_dir() / "bs_cam_rt.yaml";
   save_camera_settings(q, s);
   const auto s2 = load_camera_settings(q);
   EXPECT_DOUBLE_EQ(s2.camera.fy, 501.0);

@@ -8,6 +8,7 @@
 #include <map>
 #include <sstream>
 
+#include "../common/scratch_dir.hpp"
 #include "core/errors.hpp"
 #include "couple/lcm_codec.hpp"
 #include "couple/lcm_types.hpp"
@@ -102,12 +103,13 @@ TEST(LcmCodec, DecodesLcmGenBytesAndReencodesThemExactly) {
 
 TEST(LcmCodec, LcmGenDecodesWhatWeEncode) {
   const TypeRegistry t = load();
+  const auto dir = builtscene::testing::scratch_dir("lcm_codec");
   for (const auto& [type, value] : samples()) {
     LcmCodec codec(t, type);
     json v = value;
     if (type == "bstest.primitives_t") v["s"] = "a different string";  // not the helper's sample
     const auto ours = codec.encode(v);
-    const std::string file = testing::TempDir() + "/ours.bin";
+    const std::string file = (dir / "ours.bin").string();
     std::ofstream(file, std::ios::binary).write(reinterpret_cast<const char*>(ours.data()),
                                                 static_cast<std::streamsize>(ours.size()));
     const auto back = bytes(run(std::string(LCMGEN_HELPER) + " roundtrip " + type + " < " + file));

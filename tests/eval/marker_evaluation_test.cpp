@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 
 #include "../common/run_cli.hpp"
+#include "../common/scratch_dir.hpp"
 #include "core/errors.hpp"
 #include "eval/marker_evaluation.hpp"
 
@@ -123,9 +124,7 @@ TEST(MarkerEvaluation, UnknownUnseenAndTooFewMarkers) {
 }
 
 TEST(MarkerEvaluationCli, WritesTablesAndJsonAndRejectsBadInput) {
-  const auto dir = fs::temp_directory_path() / "bs_eval_markers";
-  fs::remove_all(dir);
-  fs::create_directories(dir);
+  const auto dir = testing::scratch_dir("eval_markers");
   {
     std::ofstream t(dir / "truth.csv");
     t << "id,x,y,z,yaw,size\n";

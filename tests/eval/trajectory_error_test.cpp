@@ -6,6 +6,7 @@
 #include <random>
 
 #include "../common/run_cli.hpp"
+#include "../common/scratch_dir.hpp"
 #include "core/errors.hpp"
 #include "eval/trajectory_error.hpp"
 #include "eval/umeyama.hpp"
@@ -144,8 +145,7 @@ TEST(AteCli, MatchesIndependentNumpyReferenceOnRealGroundTruth) {
   for (std::size_t i = 0; i < gt.size(); ++i) noise.emplace_back(g(rng), g(rng), g(rng));
   const Sim3 T(Eigen::Quaterniond(Eigen::AngleAxisd(2.0, Eigen::Vector3d(0.3, 1, -0.2).normalized())),
                Eigen::Vector3d(-1, 7, 0.5), 1.7);
-  const auto dir = fs::temp_directory_path() / "bs_ate_real";
-  fs::create_directories(dir);
+  const auto dir = testing::scratch_dir("ate_real");
   write_tum_trajectory(dir / "est.txt", make_estimate(gt, T, noise));
   for (const std::string align : {"se3", "sim3"}) {
     const auto ours = testing::run_cli("eval ate --json --align " + align + " --gt " + testing::shell_quote(gt_path) +

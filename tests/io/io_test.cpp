@@ -5,6 +5,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "../common/run_cli.hpp"
+#include "../common/scratch_dir.hpp"
 #include "core/errors.hpp"
 #include "io/trajectory.hpp"
 #include "io/tum_dataset.hpp"
@@ -14,12 +15,8 @@ namespace {
 
 namespace fs = std::filesystem;
 
-fs::path temp_dir(const std::string& name) {
-  const auto d = fs::temp_directory_path() / ("bs_io_" + name);
-  fs::remove_all(d);
-  fs::create_directories(d);
-  return d;
-}
+// A fresh folder bs_io_<name>_<pid>, removed when the test process exits.
+fs::path temp_dir(const std::string& name) { return testing::scratch_dir("io_" + name); }
 
 void write(const fs::path& p, const std::string& text) { std::ofstream(p) << text; }
 

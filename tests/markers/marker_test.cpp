@@ -10,6 +10,7 @@
 
 #include "../common/kinect_camera.hpp"
 #include "../common/run_cli.hpp"
+#include "../common/scratch_dir.hpp"
 #include "core/errors.hpp"
 #include "markers/marker_measurements.hpp"
 
@@ -185,8 +186,7 @@ TEST(AprilTagReal, CornersWithinOnePointFivePixelsOfTheListedOnes) {
 }
 
 TEST(MarkerCsv, RoundTripAndErrors) {
-  const auto d = fs::temp_directory_path() / "bs_markers_csv";
-  fs::create_directories(d);
+  const auto d = testing::scratch_dir("markers_csv");
   std::vector<MarkerMeasurement> ms{{3, 0.1, 7, {1, 2, 0.01}, 2.5, 30}, {4, 0.133, 8, {-1, 0.5, 0}, 1.5, 10}};
   write_marker_measurements(d / "m.csv", ms);
   const auto r = read_marker_measurements(d / "m.csv");

@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 
 #include "../common/run_cli.hpp"
+#include "../common/scratch_dir.hpp"
 #include "ogm/map_server_io.hpp"
 
 namespace builtscene {
@@ -24,8 +25,7 @@ fs::path write_room() {
   for (int r = 0; r < 120; ++r)
     for (int c = 0; c < 200; ++c)
       if (r == 0 || c == 0 || r == 119 || c == 199 || (c == 100 && r < 90)) g.at({c, r}) = 100;
-  const auto dir = fs::temp_directory_path() / "bs_plan_cli";
-  fs::create_directories(dir);
+  const auto dir = testing::scratch_dir("plan_cli");
   save_map_server(g, dir / "room.yaml");
   return dir;
 }

@@ -5,6 +5,7 @@
 
 #include <opencv2/imgcodecs.hpp>
 
+#include "../common/scratch_dir.hpp"
 #include "../ogm/analytic_depth.hpp"
 #include "core/errors.hpp"
 #include "nav/points_of_interest.hpp"
@@ -56,8 +57,7 @@ TEST(PoiTrigger, FiresOncePerVisitDespiteBoundaryNoise) {
 }
 
 TEST(PointsOfInterest, CsvErrorsNameFileAndLine) {
-  const auto d = fs::temp_directory_path() / "bs_poi";
-  fs::create_directories(d);
+  const auto d = testing::scratch_dir("poi");
   std::ofstream(d / "ok.csv") << "name,x,y,radius\ndoor,1,2,0.5\n";
   EXPECT_EQ(read_points_of_interest(d / "ok.csv").size(), 1u);
   std::ofstream(d / "bad.csv") << "name,x,y,radius\ndoor,1,2,0.5\nwin,1,x,0.5\n";
@@ -85,8 +85,7 @@ TEST(PointCloud, PlyRoundTripAndVoxelMeans) {
   EXPECT_NEAR(v[0].position.x(), 0.03f, 1e-6);
   EXPECT_NEAR(v[0].position.y(), 0.03f, 1e-6);
   EXPECT_EQ(v[0].rgb[1], 40);
-  const auto d = fs::temp_directory_path() / "bs_ply";
-  fs::create_directories(d);
+  const auto d = testing::scratch_dir("ply");
   write_ply(d / "c.ply", c);
   EXPECT_EQ(fs::file_size(d / "c.ply") - c.size() * 15, fs::file_size(d / "c.ply") - 60);
   const PointCloud r = read_ply(d / "c.ply");
@@ -108,8 +107,7 @@ fs::path write_room_dataset(std::vector<SE3>& poses, std::vector<testing::Box>& 
   boxes = {{{-0.1, -2.1, 0}, {8.1, -2.0, 2.5}}, {{-0.1, 2.0, 0}, {8.1, 2.1, 2.5}}, {{-0.2, -2.1, 0}, {-0.1, 2.1, 2.5}},
            {{8.0, -2.1, 0}, {8.1, 2.1, 2.5}},   {{-1, -3, -0.1}, {9, 3, 0.0}},      {{3.5, -0.5, 0}, {4.5, 0.5, 1.0}}};
   const auto cam = testing::kinect_camera();
-  const auto d = fs::temp_directory_path() / "bs_cloud_ds";
-  fs::remove_all(d);
+  const auto d = testing::scratch_dir("cloud_ds");
   fs::create_directories(d / "rgb");
   fs::create_directories(d / "depth");
   std::ofstream(d / "camera.yaml") << "Camera.fx: 525\nCamera.fy: 525\nCamera.cx: 319.5\nCamera.cy: 239.5\nCamera.width: 640\nCamera.height: 480\nDepthMapFactor: 5000\n";

@@ -5,6 +5,7 @@
 
 #include <opencv2/imgcodecs.hpp>
 
+#include "../common/scratch_dir.hpp"
 #include "analytic_depth.hpp"
 #include "core/errors.hpp"
 #include "ogm/grid_resampling.hpp"
@@ -167,12 +168,8 @@ TEST(OccupancyGridMapper, MultiPairBatchRebuildsFromScratch) {
   EXPECT_EQ(m.scans_integrated(), scans.size());
 }
 
-fs::path temp_dir(const std::string& name) {
-  const auto d = fs::temp_directory_path() / ("bs_ogm_" + name);
-  fs::remove_all(d);
-  fs::create_directories(d);
-  return d;
-}
+// A fresh folder bs_ogm_<name>_<pid>, removed when the test process exits.
+fs::path temp_dir(const std::string& name) { return testing::scratch_dir("ogm_" + name); }
 
 TEST(MapServerIo, RoundTripKeepsClassesAndFlipsRows) {
   OccupancyGrid g(40, 30, 0.05, {-1.0, 2.0}, -1);

@@ -8,6 +8,7 @@
 #include <map>
 #include <sstream>
 
+#include "../common/scratch_dir.hpp"
 #include "core/errors.hpp"
 #include "map_test_fixture.hpp"
 #include "slam/map_points_csv.hpp"
@@ -25,7 +26,7 @@ TEST(MapPointsCsv, OneRowPerObservationWithTheKeyframesKeypointAndDepth) {
     retired = map.points().front();
     retired->set_bad(map);
   }
-  const auto path = std::filesystem::temp_directory_path() / "bs_map_points.csv";
+  const auto path = testing::scratch_dir("map_points") / "bs_map_points.csv";
   const auto info = write_map_points_csv(map, path);
 
   std::map<long, std::shared_ptr<MapPoint>> by_id;
