@@ -64,9 +64,7 @@ void SlamOgmOutput::subscribe(slam::System& system) {
     ++loop_events_pending_;
     if (!lcm_) return;
     LcmLoopEvent m;
-    m.stage = e.stage == slam::LoopEvent::Stage::kPoseGraph              ? "pose_graph"
-              : e.stage == slam::LoopEvent::Stage::kGlobalBundleAdjustment ? "global_ba"
-                                                                           : "final_ba";
+    m.stage = slam::stage_name(e.stage);
     m.loop = e.loop;
     m.frame = e.frame;
     m.time = e.timestamp;

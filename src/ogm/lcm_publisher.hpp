@@ -21,7 +21,7 @@ struct LcmPoiEvent {
 
 // slam::LoopEvent as the message carries it (this module does not depend on the SLAM).
 struct LcmLoopEvent {
-  std::string stage;  // "pose_graph" | "global_ba"
+  std::string stage;  // "pose_graph" | "global_ba" | "final_ba" (slam::stage_name)
   long loop = 0, frame = 0;
   double time = 0;
   long keyframe = 0, matched_keyframe = 0;

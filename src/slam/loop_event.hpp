@@ -34,4 +34,14 @@ struct LoopEvent {
   std::vector<KeyFramePose> keyframes;  // every keyframe in the map, poses after this stage
 };
 
+// The stage's name in the LOOP_EVENTS message (ogm_messages.lcm, loop_event_t.stage).
+inline const char* stage_name(LoopEvent::Stage stage) {
+  switch (stage) {
+    case LoopEvent::Stage::kPoseGraph: return "pose_graph";
+    case LoopEvent::Stage::kGlobalBundleAdjustment: return "global_ba";
+    case LoopEvent::Stage::kFinalBundleAdjustment: return "final_ba";
+  }
+  return "?";
+}
+
 }  // namespace builtscene::slam
