@@ -5,6 +5,7 @@
 #include <fstream>
 
 #include "core/errors.hpp"
+#include "../common/scratch_dir.hpp"
 
 namespace builtscene::barcode {
 namespace {
@@ -33,7 +34,7 @@ TEST(Evaluation, RatesReadsAndFalseCodesByHand) {
 }
 
 TEST(Evaluation, TruthFileErrorsNameTheFile) {
-  const auto f = std::filesystem::temp_directory_path() / ("bs_truth_" + std::to_string(::getpid()) + ".csv");
+  const auto f = builtscene::testing::scratch_dir("truth") / "bs_truth.csv";
   std::ofstream(f) << "text,kind\nRM1401A,location\n";
   try {
     read_truth(f);

@@ -10,17 +10,13 @@
 #include "barcode/scan_pipeline.hpp"
 #include "core/errors.hpp"
 #include "test_images.hpp"
+#include "../common/scratch_dir.hpp"
 
 namespace builtscene::barcode {
 namespace {
 namespace fs = std::filesystem;
 
-fs::path frames_dir(const std::string& name) {
-  const fs::path d = fs::temp_directory_path() / ("bs_frames_" + name + "_" + std::to_string(::getpid()));
-  fs::remove_all(d);
-  fs::create_directories(d);
-  return d;
-}
+fs::path frames_dir(const std::string& name) { return builtscene::testing::scratch_dir("frames_" + name); }
 
 std::string error_of(const fs::path& p) {
   try {

@@ -5,17 +5,13 @@
 #include <fstream>
 
 #include "core/errors.hpp"
+#include "../common/scratch_dir.hpp"
 
 namespace builtscene::barcode {
 namespace {
 namespace fs = std::filesystem;
 
-fs::path inventory_dir(const std::string& name) {
-  const fs::path d = fs::temp_directory_path() / ("bs_barcode_" + name + "_" + std::to_string(::getpid()));
-  fs::remove_all(d);
-  fs::create_directories(d);
-  return d;
-}
+fs::path inventory_dir(const std::string& name) { return builtscene::testing::scratch_dir("barcode_" + name); }
 
 TEST(FrameRanges, FormatAndParse) {
   EXPECT_EQ(format_frame_ranges({3, 4, 5, 6, 7, 12, 20, 21}), "3-7;12;20-21");

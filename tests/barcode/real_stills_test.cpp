@@ -12,6 +12,7 @@
 
 #include "barcode/frame_source.hpp"
 #include "barcode/scan_pipeline.hpp"
+#include "../common/scratch_dir.hpp"
 
 namespace builtscene::barcode {
 namespace {
@@ -80,7 +81,7 @@ TEST(RealStills, PipelineReadsAtLeastAsManyAsTheDecoderAloneAtEveryAngle) {
     for (std::size_t i = 0; i < stills.size(); i += 3) some.push_back(stills[i]);
     stills = some;
   }
-  const fs::path tmp = fs::temp_directory_path() / ("bs_stills_" + std::to_string(::getpid()));
+  const fs::path tmp = builtscene::testing::scratch_dir("stills");
   std::printf("%6s %8s %14s %10s\n", "angle", "stills", "decoder_only", "pipeline");
   for (double angle : {0.0, 30.0, 45.0, 60.0, 90.0}) {
     fs::remove_all(tmp);

@@ -9,6 +9,7 @@
 #include "barcode/evaluation.hpp"
 #include "barcode/scan_pipeline.hpp"
 #include "synth/warehouse_scene.hpp"
+#include "../common/scratch_dir.hpp"
 
 namespace builtscene::barcode {
 namespace {
@@ -16,7 +17,7 @@ namespace fs = std::filesystem;
 
 struct GeneratedScan : public ::testing::Test {
   static void SetUpTestSuite() {
-    dir = fs::temp_directory_path() / ("bs_scan_e2e_" + std::to_string(::getpid()));
+    dir = builtscene::testing::scratch_dir("scan_e2e");
     fs::remove_all(dir);
     synth::WarehouseOptions o;
     o.seed = 11;

@@ -42,6 +42,17 @@ std::string run(const std::string& cmd) {
 
 std::vector<uint8_t> bytes(const std::string& s) { return {s.begin(), s.end()}; }
 
+// `s` as one shell word: in single quotes, each embedded ' written as '\'' (spaces and the
+// like in a temporary or build folder stay part of the path).
+std::string shell_quote(const std::string& s) {
+  std::string r = "'";
+  for (char c : s) r += (c == '\'') ? std::string("'\\''") : std::string(1, c);
+  return r + "'";
+}
+
+// The lcm-gen helper program, quoted for the shell.
+std::string helper() { return shell_quote(LCMGEN_HELPER); }
+
 // The same values lcmgen_helper.cpp fills in, written out independently.
 json primitives(int k) {
   return {{"i8", -5 - k}, {"i16", -300 + k}, {"i32", 70000 + k}, {"i64", -1234567890123LL - k},
@@ -77,7 +88,7 @@ const std::map<std::string, json>& samples() {
 
 TEST(LcmCodec, FingerprintsEqualLcmGen) {
   const TypeRegistry t = load();
-  std::istringstream in(run(std::string(LCMGEN_HELPER) + " fingerprints"));
+  std::istringstream in(run(helper() + " fingerprints"));
   std::string name;
   unsigned long long hash = 0;
   int n = 0;
@@ -91,7 +102,7 @@ TEST(LcmCodec, FingerprintsEqualLcmGen) {
 TEST(LcmCodec, DecodesLcmGenBytesAndReencodesThemExactly) {
   const TypeRegistry t = load();
   for (const auto& [type, expected] : samples()) {
-    const auto theirs = bytes(run(std::string(LCMGEN_HELPER) + " make " + type));
+    const auto theirs = bytes(run(helper() + " make " + type));
     ASSERT_GT(theirs.size(), 8u) << type;
     LcmCodec codec(t, type);
     const json decoded = codec.decode(theirs);
@@ -112,7 +123,7 @@ TEST(LcmCodec, LcmGenDecodesWhatWeEncode) {
     const std::string file = (dir / "ours.bin").string();
     std::ofstream(file, std::ios::binary).write(reinterpret_cast<const char*>(ours.data()),
                                                 static_cast<std::streamsize>(ours.size()));
-    const auto back = bytes(run(std::string(LCMGEN_HELPER) + " roundtrip " + type + " < " + file));
+    const auto back = bytes(run(helper() + " roundtrip " + type + " < " + shell_quote(file)));
     EXPECT_EQ(back, ours) << type;
   }
 }

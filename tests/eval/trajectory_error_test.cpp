@@ -1,7 +1,5 @@
 #include <gtest/gtest.h>
 
-#include <unistd.h>
-
 #include <cmath>
 #include <random>
 
@@ -183,8 +181,7 @@ TEST(AteCli, AlignedOutputLandsOnTheGroundTruth) {
   const Sim3 T(Eigen::Quaterniond(Eigen::AngleAxisd(1.1, Eigen::Vector3d(1, 2, 3).normalized())),
                Eigen::Vector3d(4, -2, 1), 1.0);
   const std::vector<Eigen::Vector3d> no_noise(gt.size(), Eigen::Vector3d::Zero());
-  const auto dir = fs::temp_directory_path() / ("bs_ate_aligned_" + std::to_string(::getpid()));
-  fs::create_directories(dir);
+  const auto dir = testing::scratch_dir("ate_aligned");
   write_tum_trajectory(dir / "gt.txt", gt);
   write_tum_trajectory(dir / "est.txt", make_estimate(gt, T, no_noise));
   const auto r = testing::run_cli("eval ate --json --gt " + testing::shell_quote(dir / "gt.txt") + " --est " +

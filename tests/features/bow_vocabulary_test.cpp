@@ -11,10 +11,9 @@
 #include <random>
 #include <set>
 
-#include <unistd.h>
-
 #include "core/errors.hpp"
 #include "features/bow_vocabulary.hpp"
+#include "../common/scratch_dir.hpp"
 
 namespace builtscene {
 namespace {
@@ -241,8 +240,7 @@ TEST(BowVocabulary, DirectIndexGroupsEveryFeatureUnderItsNodeAtTheDepth) {
 class BowVocabularyFile : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = std::filesystem::temp_directory_path() / ("bs_bow_test_" + std::to_string(::getpid()));
-    std::filesystem::create_directories(dir_);
+    dir_ = testing::scratch_dir("bow_test");
     std::mt19937 rng(23);
     protos_ = binary_prototypes(20, rng);
     data_ = make_images(protos_, 4, 3, [&](const cv::Mat& p) { return noisy_binary(p, 10, rng); });

@@ -6,8 +6,6 @@
 #include <filesystem>
 #include <fstream>
 
-#include <unistd.h>
-
 #include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -21,6 +19,7 @@
 #include "features/saft_network.hpp"
 #include "features/saft_patch.hpp"
 #include "test_images.hpp"
+#include "../common/scratch_dir.hpp"
 
 namespace builtscene {
 namespace {
@@ -30,12 +29,7 @@ const ScalePyramid kOneLevel = ScalePyramid::make(1.2f, 1);
 
 namespace fs = std::filesystem;
 
-fs::path temp_dir(const std::string& name) {
-  const fs::path d = fs::temp_directory_path() / ("bs_saft_" + name + "_" + std::to_string(::getpid()));
-  fs::remove_all(d);
-  fs::create_directories(d);
-  return d;
-}
+fs::path temp_dir(const std::string& name) { return testing::scratch_dir("saft_" + name); }
 
 TEST(SaftPatch, RotatedKeypointSeesTheRotatedImage) {
   const cv::Mat img = test::textured_image(200, 160, 5);

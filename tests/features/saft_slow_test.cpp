@@ -10,6 +10,7 @@
 
 #include "../common/run_cli.hpp"
 #include "test_images.hpp"
+#include "../common/scratch_dir.hpp"
 
 namespace builtscene {
 namespace {
@@ -18,12 +19,7 @@ namespace fs = std::filesystem;
 using testing::run_cli;
 using testing::shell_quote;
 
-fs::path fresh_dir(const std::string& name) {
-  const fs::path d = fs::temp_directory_path() / ("bs_saft_slow_" + name + "_" + std::to_string(::getpid()));
-  fs::remove_all(d);
-  fs::create_directories(d);
-  return d;
-}
+fs::path fresh_dir(const std::string& name) { return testing::scratch_dir("saft_slow_" + name); }
 
 TEST(SaftCli, TrainingLowersValidationFpr95) {
   const fs::path dir = fresh_dir("train");

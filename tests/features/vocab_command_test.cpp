@@ -3,8 +3,6 @@
 // shipped vocabulary loads and is an ORB (binary, 32-byte) vocabulary of the documented shape.
 #include <gtest/gtest.h>
 
-#include <unistd.h>
-
 #include <fstream>
 #include <iterator>
 
@@ -12,6 +10,7 @@
 
 #include "../common/run_cli.hpp"
 #include "features/bow_vocabulary.hpp"
+#include "../common/scratch_dir.hpp"
 
 namespace builtscene {
 namespace {
@@ -23,7 +22,11 @@ using testing::shell_quote;
 const fs::path kKitchen = fs::path(BUILTSCENE_SOURCE_DIR) / "../shared/data/7scenes-kitchen";
 const fs::path kShipped = fs::path(BUILTSCENE_SOURCE_DIR) / "data/vocab/orb_k10_L4.bsvoc";
 
-fs::path temp(const std::string& name) { return fs::temp_directory_path() / ("bs_vocab_cmd_" + name + "_" + std::to_string(::getpid())); }
+// A file `name` in this process's folder `bs_vocab_cmd_<pid>` (made once, removed at exit).
+fs::path temp(const std::string& name) {
+  static const fs::path d = testing::scratch_dir("vocab_cmd");
+  return d / name;
+}
 
 std::string bytes_of(const fs::path& p) {
   std::ifstream f(p, std::ios::binary);

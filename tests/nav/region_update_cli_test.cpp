@@ -8,8 +8,6 @@
 //     where a cloud built from run B's ground-truth poses puts the scene.
 #include <gtest/gtest.h>
 
-#include <unistd.h>
-
 #include <algorithm>
 #include <cmath>
 #include <fstream>
@@ -23,6 +21,7 @@
 #include "nav/region.hpp"
 #include "ogm/ground_frame.hpp"
 #include "ogm/map_server_io.hpp"
+#include "../common/scratch_dir.hpp"
 
 namespace builtscene {
 namespace {
@@ -60,9 +59,7 @@ class PointIndex {
 };
 
 TEST(RegionUpdateCli, SlamInsideLocalizationOutsideAndOnlyTheRegionsPointsReplaced) {
-  const fs::path d = fs::temp_directory_path() / ("bs_region_update_" + std::to_string(::getpid()));
-  fs::remove_all(d);
-  fs::create_directories(d);
+  const fs::path d = testing::scratch_dir("region_update");
   constexpr int kFrames = 300;
   for (const char* run : {"A", "B"}) {
     const auto r = run_cli(std::string("synth rgbd --scene lab-room --frames ") + std::to_string(kFrames) + " --seed " +

@@ -12,8 +12,6 @@
 //     position.
 #include <gtest/gtest.h>
 
-#include <unistd.h>
-
 #include <cmath>
 #include <fstream>
 #include <map>
@@ -30,6 +28,7 @@
 #include "markers/marker_measurements.hpp"
 #include "ogm/ground_frame.hpp"
 #include "ogm/map_server_io.hpp"
+#include "../common/scratch_dir.hpp"
 
 namespace builtscene {
 namespace {
@@ -61,9 +60,7 @@ std::vector<Row2d> read_poses2d(const fs::path& p) {
 }
 
 TEST(LocalizeOutputsCli, PoseOnTheGridPoiEventsAndMarkersAgreeWithGroundTruth) {
-  const fs::path d = fs::temp_directory_path() / ("bs_localize_outputs_" + std::to_string(::getpid()));
-  fs::remove_all(d);
-  fs::create_directories(d);
+  const fs::path d = testing::scratch_dir("localize_outputs");
   constexpr int kFrames = 400;
   for (const char* seed : {"1", "2"}) {
     const auto r = run_cli("synth rgbd --scene corridor-loop --motion robot --frames " + std::to_string(kFrames) +

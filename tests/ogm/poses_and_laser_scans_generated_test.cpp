@@ -2,8 +2,6 @@
 // map built with drifting ones (label: slow, it renders a sequence).
 #include <gtest/gtest.h>
 
-#include <unistd.h>
-
 #include <cmath>
 
 #include "../common/run_cli.hpp"
@@ -12,6 +10,7 @@
 #include "ogm/map_comparison.hpp"
 #include "ogm/map_server_io.hpp"
 #include "ogm/poses_and_laser_scans.hpp"
+#include "../common/scratch_dir.hpp"
 
 namespace builtscene {
 namespace {
@@ -22,7 +21,7 @@ namespace fs = std::filesystem;
 // map must score better against the world's truth map than the drifted one (the source's
 // reason for rebuilding after optimization and loop closure).
 TEST(PosesAndLaserScansGenerated, RebuildWithCorrectedPosesScoresBetter) {
-  const fs::path dir = fs::temp_directory_path() / ("bs_pals_lab_" + std::to_string(::getpid()));
+  const fs::path dir = testing::scratch_dir("pals_lab");
   fs::remove_all(dir);
   const auto r = testing::run_cli("synth rgbd --scene lab-room --motion robot --frames 300 --seed 5 --out " +
                                   testing::shell_quote(dir));

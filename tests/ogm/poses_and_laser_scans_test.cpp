@@ -2,8 +2,6 @@
 // an lcm-gen reader sees it.
 #include <gtest/gtest.h>
 
-#include <unistd.h>
-
 #include <cmath>
 
 #include <lcm/lcm-cpp.hpp>
@@ -14,6 +12,7 @@
 #include "ogm/lcm_publisher.hpp"
 #include "../common/kinect_camera.hpp"
 #include "ogm/poses_and_laser_scans.hpp"
+#include "../common/scratch_dir.hpp"
 
 namespace builtscene {
 namespace {
@@ -92,7 +91,7 @@ TEST(PosesAndLaserScans, ScanOfAWallIsTheClosedForm) {
 }
 
 TEST(PosesAndLaserScans, LcmMessageReadsBackThroughLcmGenTypes) {
-  const fs::path log = fs::temp_directory_path() / ("bs_pals_" + std::to_string(::getpid()) + ".lcmlog");
+  const fs::path log = testing::scratch_dir("pals") / "bs_pals.lcmlog";
   fs::remove(log);
   PosesAndLaserScansEmitter e(kinect_camera(), GroundFrame::z_up(), {});
   const auto batch = e.add_keyframe(12.5, level_camera_at(1, 2), wall_depth(2.0), keyframes_up_to(1)).at(0);

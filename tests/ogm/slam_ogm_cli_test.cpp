@@ -3,8 +3,6 @@
 // alignment to ground truth, lands on the world's truth map; the LCM log holds every batch.
 #include <gtest/gtest.h>
 
-#include <unistd.h>
-
 #include <fstream>
 
 #include <lcm/lcm-cpp.hpp>
@@ -14,6 +12,7 @@
 #include "builtscene/poses_and_laser_scans_t.hpp"
 #include "io/trajectory.hpp"
 #include "ogm/map_server_io.hpp"
+#include "../common/scratch_dir.hpp"
 
 namespace builtscene {
 namespace {
@@ -28,9 +27,7 @@ SE3 se3_from_json(const nlohmann::json& t, const nlohmann::json& q) {
 }
 
 TEST(SlamOgmCli, LiveGridLandsOnTheTruthMapAndEveryBatchIsPublished) {
-  const fs::path d = fs::temp_directory_path() / ("bs_slam_ogm_" + std::to_string(::getpid()));
-  fs::remove_all(d);
-  fs::create_directories(d);
+  const fs::path d = testing::scratch_dir("slam_ogm");
   auto r = run_cli("synth rgbd --scene lab-room --frames 200 --seed 4 --out " + shell_quote(d / "seq"));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   r = run_cli("slam --json --sync-mapping --dataset " + shell_quote(d / "seq") + " --trajectory " + shell_quote(d / "t.txt") +

@@ -12,12 +12,12 @@
 #include <filesystem>
 
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include "../common/run_cli.hpp"
 #include "eval/trajectory_error.hpp"
 #include "io/tum_dataset.hpp"
 #include "slam/system.hpp"
+#include "../common/scratch_dir.hpp"
 
 namespace builtscene::slam {
 namespace {
@@ -51,8 +51,7 @@ Run run(System& system, const TumDataset& data) {
 }
 
 TEST(CorridorLocalization, FollowsTheMapRoundACornerAndAlongAPlainStretch) {
-  const fs::path dir = fs::temp_directory_path() / ("bs_corridor_loc_" + std::to_string(::getpid()));
-  fs::remove_all(dir);
+  const fs::path dir = testing::scratch_dir("corridor_loc");
   const auto a = TumDataset::open(corridor(dir, 1));
   const auto b = TumDataset::open(corridor(dir, 2));
   SystemOptions options;

@@ -16,12 +16,12 @@
 #include <string>
 
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include "../common/run_cli.hpp"
 #include "eval/trajectory_error.hpp"
 #include "io/tum_dataset.hpp"
 #include "slam/system.hpp"
+#include "../common/scratch_dir.hpp"
 
 namespace builtscene::slam {
 namespace {
@@ -63,8 +63,7 @@ Result run(const TumDataset& data, const SystemOptions& options) {
 
 // The first `frames` frames of the generated corridor world `seed` (robot), in a fresh folder.
 fs::path generate_corridor_start(int seed, const std::string& name, int frames = 600) {
-  const fs::path dir = fs::temp_directory_path() / (name + "_" + std::to_string(::getpid()));
-  fs::remove_all(dir);
+  const fs::path dir = testing::scratch_dir(name);
   const auto r = testing::run_cli("synth rgbd --scene corridor-loop --motion robot --seed " + std::to_string(seed) +
                                   " --frames " + std::to_string(frames) + " --out " + (dir / "seq").string());
   EXPECT_EQ(r.exit_code, 0) << r.err;
@@ -78,7 +77,7 @@ SystemOptions deterministic_options() {
 }
 
 TEST(CorridorStart, PlainStartHoldsWithAndWithoutPlanarMotion) {
-  const fs::path dir = generate_corridor_start(1, "bs_corridor_start");
+  const fs::path dir = generate_corridor_start(1, "corridor_start");
   const auto data = TumDataset::open(dir / "seq");
   SystemOptions options = deterministic_options();
   const Result plain = run(data, options);
@@ -115,7 +114,7 @@ TEST(CorridorStart, PlainStartHoldsWithAndWithoutPlanarMotion) {
 // feature-tracked speed (measured: 0.42 m RMSE, max 0.88 m; with straight judged over 10
 // frames, 0.34 m and 0.74 m; tracking.cpp, odometry_prediction).
 TEST(CorridorStart, DepthOdometryBridgeKeepsTheSpeedAlongAPlainCorridor) {
-  const fs::path dir = generate_corridor_start(2, "bs_corridor_bridge");
+  const fs::path dir = generate_corridor_start(2, "corridor_bridge");
   const auto data = TumDataset::open(dir / "seq");
   const Result result = run(data, deterministic_options());
   std::printf("corridor seed 2, 600 frames: %ld tracked, ATE %.2f cm (max %.2f)\n", result.tracked, 100 * result.rmse,
@@ -137,7 +136,7 @@ TEST(CorridorStart, DepthOdometryBridgeKeepsTheSpeedAlongAPlainCorridor) {
 // 36 to 80 a cabinet's end in the depth measures the true speed, and such bridge frames now
 // feed the held speed (depth_odometry.hpp, last_slide_measured): 5.2 cm, distance 1.02.
 TEST(CorridorStart, BridgeHoldsTheSpeedThroughRotationJitter) {
-  const fs::path dir = generate_corridor_start(4, "bs_corridor_jitter", 400);
+  const fs::path dir = generate_corridor_start(4, "corridor_jitter", 400);
   const auto data = TumDataset::open(dir / "seq");
   const Result result = run(data, deterministic_options());
   std::printf("corridor seed 4, 400 frames: %ld tracked, ATE %.2f cm (max %.2f), distance to frame %zu: %.3f of the truth\n",

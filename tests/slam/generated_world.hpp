@@ -1,12 +1,12 @@
 #pragma once
 // A generated RGB-D world (builtscene synth rgbd, Kinect noise unless told otherwise) in a temporary folder for
 // end-to-end tests, removed on every exit (also when a check throws: 300 frames are 250 MB).
-#include <unistd.h>
 
 #include <filesystem>
 #include <string>
 
 #include "synth/rgbd_sequence_writer.hpp"
+#include "../common/scratch_dir.hpp"
 
 namespace builtscene::slam {
 
@@ -19,8 +19,7 @@ struct GeneratedWorld {
     o.seed = seed;
     o.frames = frames;
     o.kinect_noise = kinect_noise;
-    o.out = std::filesystem::temp_directory_path() /
-            ("builtscene_slam_world_" + scene + "_" + std::to_string(seed) + "_" + std::to_string(::getpid()));
+    o.out = testing::scratch_dir("slam_world_" + scene + "_" + std::to_string(seed));  // also removed at exit
     dir = o.out;
     std::filesystem::remove_all(dir);
     synth::generate_rgbd_sequence(o);

@@ -6,8 +6,6 @@
 // (--sync-mapping) so the result does not depend on the machine's load.
 #include <gtest/gtest.h>
 
-#include <unistd.h>
-
 #include <cmath>
 #include <map>
 
@@ -19,6 +17,7 @@
 #include "../common/run_cli.hpp"
 #include "io/trajectory.hpp"
 #include "trajectory_alignment.hpp"
+#include "../common/scratch_dir.hpp"
 
 namespace builtscene::slam {
 namespace {
@@ -56,7 +55,7 @@ Eigen::Vector3d true_position(const Trajectory& truth, double t) {
 }
 
 TEST(LoopClosing, ALapAndAQuarterOfTheLabRoomAreClosedAndTheErrorDrops) {
-  const fs::path world = fs::temp_directory_path() / ("bs_loop_lab_" + std::to_string(::getpid()));
+  const fs::path world = testing::scratch_dir("loop_lab");
   fs::remove_all(world);
   struct RemoveOnExit {
     fs::path dir;

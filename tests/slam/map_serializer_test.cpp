@@ -9,14 +9,13 @@
 #include <random>
 #include <set>
 
-#include <unistd.h>
-
 #include <gtest/gtest.h>
 
 #include "core/errors.hpp"
 #include "map_test_fixture.hpp"
 #include "slam/map_serializer.hpp"
 #include "slam/plane_landmark.hpp"
+#include "../common/scratch_dir.hpp"
 
 namespace builtscene::slam {
 namespace {
@@ -160,8 +159,7 @@ TEST(MapSerializer, SaveLoadSaveIsByteIdentical) {
 
 TEST(MapSerializer, FilesRoundTripAndNameThemselvesInErrors) {
   Built a;
-  const auto dir = std::filesystem::temp_directory_path() / ("bs_map_test_" + std::to_string(::getpid()));
-  std::filesystem::create_directories(dir);
+  const auto dir = testing::scratch_dir("map_test");
   const auto path = dir / "room.map";
   write_map_file(path, a.map, *a.ctx);
   EXPECT_FALSE(std::filesystem::exists(dir / "room.map.tmp"));

@@ -5,8 +5,6 @@
 #include <algorithm>
 #include <gtest/gtest.h>
 
-#include <unistd.h>
-
 #include <cmath>
 #include <fstream>
 #include <map>
@@ -18,6 +16,7 @@
 #include "../common/run_cli.hpp"
 #include "core/so3.hpp"
 #include "io/trajectory.hpp"
+#include "../common/scratch_dir.hpp"
 
 namespace builtscene::slam {
 namespace {
@@ -28,7 +27,8 @@ using builtscene::testing::shell_quote;
 
 const fs::path kKitchen = fs::path(BUILTSCENE_SOURCE_DIR) / "../shared/data/7scenes-kitchen";
 
-fs::path temp(const std::string& name) { return fs::temp_directory_path() / ("bs_reloc_" + name + "_" + std::to_string(::getpid())); }
+// `bs_reloc_<name>_<pid>`, removed when the test process exits.
+fs::path temp(const std::string& name) { return testing::scratch_dir("reloc_" + name); }
 
 std::vector<std::string> lines(const fs::path& file) {
   std::ifstream in(file);

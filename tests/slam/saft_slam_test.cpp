@@ -10,14 +10,13 @@
 #include <map>
 #include <vector>
 
-#include <unistd.h>
-
 #include <gtest/gtest.h>
 
 #include "eval/trajectory_error.hpp"
 #include "generated_world.hpp"
 #include "io/tum_dataset.hpp"
 #include "slam/system.hpp"
+#include "../common/scratch_dir.hpp"
 
 namespace builtscene::slam {
 namespace {
@@ -210,7 +209,7 @@ TEST(SaftSlam, AMapBuiltWhileLearningLocalizesAnotherRunWithThePreTrainedNet) {
   constexpr int kFrames = 70;
   const GeneratedWorld a("lab-room", synth::MotionKind::Robot, 1, kFrames);
   const GeneratedWorld c("lab-room", synth::MotionKind::Robot, 3, kFrames - 5);
-  const auto map_path = std::filesystem::temp_directory_path() / ("bs_saft_map_" + std::to_string(::getpid()) + ".bsmap");
+  const auto map_path = testing::scratch_dir("saft_map") / "bs_saft_map.bsmap";
   struct RemoveAtExit {
     std::filesystem::path p;
     ~RemoveAtExit() {

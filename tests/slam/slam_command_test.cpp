@@ -11,6 +11,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "../common/run_cli.hpp"
+#include "../common/scratch_dir.hpp"
 
 namespace {
 
@@ -31,7 +32,7 @@ class SlamCommand : public ::testing::Test {
  protected:
   fs::path dir;
   void SetUp() override {
-    dir = fs::temp_directory_path() / ("bs_slam_cmd_" + std::to_string(::getpid()));
+    dir = builtscene::testing::scratch_dir("slam_cmd");
     fs::remove_all(dir);
   }
   void TearDown() override { fs::remove_all(dir); }
