@@ -12,6 +12,8 @@
 #include <sstream>
 #include <string>
 
+#include "shell_quote.hpp"
+
 namespace builtscene::testing {
 
 struct CliResult {
@@ -19,12 +21,6 @@ struct CliResult {
   std::string out;  // stdout
   std::string err;  // stderr
 };
-
-inline std::string shell_quote(const std::string& s) {
-  std::string r = "'";
-  for (char c : s) r += (c == '\'') ? std::string("'\\''") : std::string(1, c);
-  return r + "'";
-}
 
 // Runs a shell command line; stdout and stderr captured separately.
 inline CliResult run_cli_command(const std::string& command_line) {

@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "../common/scratch_dir.hpp"
+#include "../common/shell_quote.hpp"
 #include "core/errors.hpp"
 #include "couple/lcm_codec.hpp"
 #include "couple/lcm_types.hpp"
@@ -16,6 +17,7 @@
 using builtscene::couple::LcmCodec;
 using builtscene::couple::TypeRegistry;
 using nlohmann::json;
+using builtscene::testing::shell_quote;
 
 namespace {
 
@@ -41,14 +43,6 @@ std::string run(const std::string& cmd) {
 }
 
 std::vector<uint8_t> bytes(const std::string& s) { return {s.begin(), s.end()}; }
-
-// `s` as one shell word: in single quotes, each embedded ' written as '\'' (spaces and the
-// like in a temporary or build folder stay part of the path).
-std::string shell_quote(const std::string& s) {
-  std::string r = "'";
-  for (char c : s) r += (c == '\'') ? std::string("'\\''") : std::string(1, c);
-  return r + "'";
-}
 
 // The lcm-gen helper program, quoted for the shell.
 std::string helper() { return shell_quote(LCMGEN_HELPER); }
