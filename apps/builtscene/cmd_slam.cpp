@@ -261,6 +261,7 @@ nlohmann::json run_slam(const SlamOptions& opt) {
         {"planes_merged", lc.planes_merged},
         {"global_ba_runs", lc.global_ba_runs},
         {"final_ba_runs", lc.final_ba_runs},
+        {"final_ba_aborted", lc.final_ba_aborted},
         {"final_ba_disparity_sigma", lc.final_ba_disparity_sigma},
         {"final_ba_measured_disparity_sigma", lc.final_ba_measured_disparity_sigma},
         {"global_ba_aborted", lc.global_ba_aborted},

@@ -560,7 +560,7 @@ void LoopCloser::run_global_ba(long loop, long keyframe, long matched, bool fina
   const auto r = solve_bundle_adjustment(pb, bo, &abort_gba_);
   if (r.aborted || !r.solved) {
     std::lock_guard s(stats_mutex_);
-    ++stats_.global_ba_aborted;
+    ++(final_pass ? stats_.final_ba_aborted : stats_.global_ba_aborted);
     return;
   }
   if (mapping_) {

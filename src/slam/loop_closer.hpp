@@ -142,9 +142,10 @@ class LoopCloser {
     long points_fused = 0;
     long planes_merged = 0;  // plane landmarks joined after corrections (refit_and_merge_planes)
     long global_ba_runs = 0, global_ba_aborted = 0, global_ba_merged = 0;
-    // The final bundle adjustment (refine_map): 1 when it ran, and the disparity sigma it used
-    // (pixels) with the robust spread it measured (0 when it did not run).
-    long final_ba_runs = 0;
+    // The final bundle adjustment (refine_map): 1 when it ran (final_ba_aborted: 1 when it then
+    // failed to solve or was aborted, and the map was left as it was), and the disparity sigma it
+    // used (pixels) with the robust spread it measured (0 when it did not run).
+    long final_ba_runs = 0, final_ba_aborted = 0;
     double final_ba_disparity_sigma = 0, final_ba_measured_disparity_sigma = 0;
     // The most connected parts any loop's essential graph fell into: 1 when every keyframe is
     // tied to the rest (a part no edge joins would move rigidly and leave a step).

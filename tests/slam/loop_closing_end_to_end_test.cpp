@@ -157,6 +157,7 @@ TEST(LoopClosing, ALapAndAQuarterOfTheLabRoomAreClosedAndTheErrorDrops) {
     // A run that closed a loop ends with the final bundle adjustment, once, and says so.
     EXPECT_EQ(final_ba, 1);
     EXPECT_EQ(on.summary["loop_closing"]["final_ba_runs"].get<int>(), 1);
+    EXPECT_EQ(on.summary["loop_closing"]["final_ba_aborted"].get<int>(), 0);
   }
   // The grids against the world's truth map, each carried into the truth's frame with its own
   // keyframes' best rigid alignment to ground truth. The final grid with loop closing (before
