@@ -5,8 +5,11 @@
 # the survey (Tables 2.1 and 2.2 of the source: per-marker position RMSE, consecutive distances).
 #   bench/markers_corridor.sh [WORKDIR]     (default /tmp/builtscene-markers-corridor)
 # Environment: LOOPS (5), NOISE (kinect | none), MAP_SEED (1), RUN_SEED (2), MAP_LOOPS (loops of
-# the map run, 1), SLAM_EXTRA (more `slam` arguments for the map run, e.g. "--sync-mapping
-# --depth-planes"), LOC_EXTRA (more `localize` arguments, e.g. "--camera far.yaml").
+# the map run, 1), MAP_FRAMES (frames of the map run, default all of MAP_LOOPS loops: fewer ends
+# the map run part-way round its last loop, e.g. MAP_LOOPS=3 MAP_FRAMES=8050 drives 2.25 loops,
+# past the start, so the second loop's end is closed like the first's), SLAM_EXTRA (more `slam`
+# arguments for the map run, e.g. "--sync-mapping --depth-planes"), LOC_EXTRA (more `localize`
+# arguments, e.g. "--camera far.yaml").
 # Output: WORKDIR/eval/markers.md, .csv tables, markers.png; bench-out/markers_corridor.json
 # (slam, localize and eval summaries) and a line per stage on stderr.
 set -euo pipefail
@@ -18,14 +21,17 @@ NOISE=${NOISE:-kinect}
 MAP_SEED=${MAP_SEED:-1}
 RUN_SEED=${RUN_SEED:-2}
 MAP_LOOPS=${MAP_LOOPS:-1}
+MAP_FRAMES=${MAP_FRAMES:-}
 SLAM_EXTRA=${SLAM_EXTRA:-}
 LOC_EXTRA=${LOC_EXTRA:-}
 mkdir -p "$WORK" bench-out
 map_run="$WORK/map-$NOISE-$MAP_SEED"
 [ "$MAP_LOOPS" = 1 ] || map_run="$map_run-$MAP_LOOPS"
+map_frames=()
+[ -z "$MAP_FRAMES" ] || { map_run="$map_run-$MAP_FRAMES"; map_frames=(--frames "$MAP_FRAMES"); }
 loc_run="$WORK/loc-$NOISE-$RUN_SEED-$LOOPS"
 [ -f "$map_run/rgb.txt" ] || "$BIN" -q synth rgbd --scene corridor-loop --motion robot --loops "$MAP_LOOPS" \
-  --noise "$NOISE" --seed "$MAP_SEED" --out "$map_run"
+  "${map_frames[@]}" --noise "$NOISE" --seed "$MAP_SEED" --out "$map_run"
 [ -f "$loc_run/rgb.txt" ] || "$BIN" -q synth rgbd --scene corridor-loop --motion robot --loops "$LOOPS" \
   --noise "$NOISE" --seed "$RUN_SEED" --out "$loc_run"
 echo "markers_corridor: SLAM on $MAP_LOOPS loop(s) ($(wc -l < "$map_run/groundtruth.txt") poses)" >&2
