@@ -51,6 +51,7 @@ struct SlamOptions {
   int bridge_local_map = -1;  // --bridge-local-map
   int global_ba_iterations = slam::LoopClosingOptions{}.global_ba_iterations;
   bool no_final_ba = false;
+  bool no_close_at_end = false;
   double bridge_link_cm = slam::BridgeLinkOptions{}.sigma_m * 100.0;
   double bridge_link_deg = slam::BridgeLinkOptions{}.sigma_deg;
   double min_parallax_sigmas = slam::LocalMappingOptions{}.min_parallax_sigmas;
@@ -105,6 +106,7 @@ nlohmann::json run_slam(const SlamOptions& opt) {
   so.tracking.bridge_local_map_inliers = opt.bridge_local_map;
   so.loop.global_ba_iterations = opt.global_ba_iterations;
   so.loop.final_bundle_adjustment = !opt.no_final_ba;
+  so.loop.close_at_end = !opt.no_close_at_end;
   so.loop.bridge_links.sigma_m = opt.bridge_link_cm / 100.0;
   so.loop.bridge_links.sigma_deg = opt.bridge_link_deg;
   so.mapping.min_parallax_sigmas = opt.min_parallax_sigmas;
@@ -254,6 +256,8 @@ nlohmann::json run_slam(const SlamOptions& opt) {
        {{"enabled", system.loop_closing_enabled()},
         {"keyframes_checked", lc.keyframes_checked},
         {"consistent_candidates", lc.consistent_candidates},
+        {"end_candidates", lc.end_candidates},
+        {"loops_closed_at_end", lc.loops_closed_at_end},
         {"rejected", lc.rejected},
         {"rejected_anchored", lc.rejected_anchored},
         {"rejected_implausible", lc.rejected_implausible},
@@ -385,6 +389,10 @@ const bool registered_slam = register_command({
       cmd.add_flag("--no-final-ba", opt->no_final_ba,
                    "Skip the final bundle adjustment a run that closed a loop ends with (the depth readings weighed "
                    "by the disparity noise the map shows; docs/slam.md, \"The final bundle adjustment\")");
+      cmd.add_flag("--no-close-at-end", opt->no_close_at_end,
+                   "Do not close a loop at the end of the run whose place was recognised on every keyframe but one "
+                   "too few to be confirmed (it still passes every geometric check; docs/slam.md, \"The loop at "
+                   "the end of a run\")");
       cmd.add_option("--bridge-link-cm", opt->bridge_link_cm,
                      "Global BA holds the pose between the keyframes either side of a stretch the depth odometry "
                      "carried (a featureless turn) to its value after the pose graph, with this standard deviation "

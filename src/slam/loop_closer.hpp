@@ -53,6 +53,13 @@ struct LoopClosingOptions {
   int min_keyframes = 10;       // map size before loops are searched, and keyframes between two loops (ORB-SLAM2)
   int min_keyframe_gap = 20;    // candidates at least this many keyframe ids older (not the recent past)
   int consistency = 3;          // ORB-SLAM2's covisibility consistency threshold
+  // At the end of a run (finish), the candidates that fell one short of `consistency` at one
+  // of the last close_at_end_window checked keyframes (the newest such keyframe) are verified
+  // and, if they pass every geometric check, closed: no later keyframe can confirm them. A
+  // robot that ends where it started would otherwise leave its last lap open (the generated
+  // corridor: the start is recognised a keyframe or two before the data ends).
+  bool close_at_end = true;
+  int close_at_end_window = 3;
   int min_bow_matches = 20;     // per candidate (ORB-SLAM2)
   double ransac_inlier_m = 0.08;  // 3D-3D residual; Kinect depth noise at 4 m is ~3 cm per point
   int ransac_min_inliers = 15;
@@ -135,6 +142,9 @@ class LoopCloser {
   struct Stats {
     long keyframes_checked = 0;
     long consistent_candidates = 0;  // candidates that passed the consistency check
+    // ... of which checked at the end of the run one short of it (close_at_end), and the loops
+    // they closed
+    long end_candidates = 0, loops_closed_at_end = 0;
     long rejected = 0;               // ... and failed geometric verification
     long rejected_anchored = 0;      // ... of which verified, but contradicting old links
     long rejected_implausible = 0;   // ... of which verified, but larger than the path could drift
@@ -172,6 +182,12 @@ class LoopCloser {
   std::thread thread_;
 
   LoopConsistency consistency_;  // loop-closing thread only
+  // The newest keyframe whose candidates fell one short of consistency, and those candidates
+  // (close_at_end); cleared when a loop closes after it.
+  std::weak_ptr<KeyFrame> end_query_;
+  std::vector<long> end_candidates_;
+  long consistency_checks_ = 0;  // keyframes checked for consistency so far
+  long end_check_ = 0;           // ... when end_query_ was
   long last_loop_kf_id_ = -1000000;
   long loops_ = 0;
 
@@ -187,6 +203,7 @@ class LoopCloser {
   std::unique_ptr<LoopMatch> detect(KeyFrame& kf);
   std::unique_ptr<LoopMatch> verify(KeyFrame& kf, KeyFrame& candidate);
   void correct(const std::shared_ptr<KeyFrame>& kf, const LoopMatch& match);
+  void close_at_end();
   void stop_global_ba();
   // final_pass: refine_map's adjustment (its own sigma and iterations, its own event).
   void run_global_ba(long loop, long keyframe, long matched, bool final_pass = false);

@@ -23,7 +23,14 @@ class LoopConsistency {
   // The candidates of the next checked keyframe; returns the accepted candidates' ids (in
   // the order given). An empty list breaks every chain.
   std::vector<long> update(const std::vector<Candidate>& candidates);
-  void reset() { groups_.clear(); }
+  // The candidates of the last update whose group fell one short of `required` (the place
+  // recognised on every keyframe so far, but one keyframe too few): at the end of a run no
+  // later keyframe can confirm them (LoopCloser::finish).
+  const std::vector<long>& one_short() const { return one_short_; }
+  void reset() {
+    groups_.clear();
+    one_short_.clear();
+  }
 
   struct Group {
     std::set<long> members;
@@ -34,6 +41,7 @@ class LoopConsistency {
  private:
   int required_;
   std::vector<Group> groups_;
+  std::vector<long> one_short_;
 };
 
 }  // namespace builtscene::slam

@@ -47,5 +47,30 @@ TEST(LoopConsistency, OneChainDoesNotMultiply) {
   EXPECT_EQ(lc.groups()[0].consistency, 1);
 }
 
+TEST(LoopConsistency, ThePlaceRecognisedOnOneKeyframeTooFewIsOneShort) {
+  // What a run's end leaves (LoopCloser::close_at_end): the place seen on three consecutive
+  // keyframes of four needed is one short; a fresh or a broken chain is not, and an accepted
+  // candidate is not listed again.
+  LoopConsistency lc(3);
+  lc.update({C{5, {4, 6}}});
+  EXPECT_TRUE(lc.one_short().empty());  // consistency 0
+  lc.update({C{6, {5, 7}}, C{90, {}}});
+  EXPECT_TRUE(lc.one_short().empty());  // 1 and 0
+  lc.update({C{5, {4, 6}}, C{91, {}}});
+  EXPECT_EQ(lc.one_short(), std::vector<long>{5});  // 2 of 3: one short; 91 is new
+  EXPECT_EQ(lc.update({C{7, {6, 8}}}), std::vector<long>{7});
+  EXPECT_TRUE(lc.one_short().empty());  // accepted, not one short
+  EXPECT_TRUE(lc.update({}).empty());
+  EXPECT_TRUE(lc.one_short().empty());
+  lc.update({C{5, {4, 6}}});
+  lc.update({C{5, {4, 6}}});
+  lc.reset();
+  EXPECT_TRUE(lc.one_short().empty());
+  // With one consistent keyframe required, every new place is one short.
+  LoopConsistency one(1);
+  one.update({C{40, {}}, C{50, {}}});
+  EXPECT_EQ(one.one_short(), (std::vector<long>{40, 50}));
+}
+
 }  // namespace
 }  // namespace builtscene::slam
