@@ -109,28 +109,22 @@ void LoopCloser::finish() {
 
 void LoopCloser::close_at_end() {
   const auto kf = end_query_.lock();
-  const std::vector<long> ids = std::move(end_candidates_);
+  const auto candidates = std::move(end_candidates_);
   end_candidates_.clear();
   // Only a place recognised at the very end: older chains had later keyframes to confirm them.
-  if (!kf || ids.empty() || consistency_checks_ - end_check_ >= opt_.close_at_end_window) return;
+  if (!kf || candidates.empty() || consistency_checks_ - end_check_ >= opt_.close_at_end_window) return;
   std::unique_ptr<LoopMatch> match;
   {
     std::lock_guard lock(map_.mutex());
     if (kf->bad) return;
-    for (long id : ids) {
-      std::shared_ptr<KeyFrame> cand;
-      for (const auto& k : map_.keyframes())
-        if (k->id == id) cand = k;
-      if (!cand || cand->bad) continue;
-      {
-        std::lock_guard s(stats_mutex_);
-        ++stats_.consistent_candidates;
-        ++stats_.end_candidates;
+    std::vector<std::shared_ptr<KeyFrame>> alive;  // held while verified
+    std::vector<KeyFrame*> good;
+    for (const auto& c : candidates)
+      if (auto k = c.lock(); k && !k->bad) {
+        good.push_back(k.get());
+        alive.push_back(std::move(k));
       }
-      if ((match = verify(*kf, *cand))) break;
-      std::lock_guard s(stats_mutex_);
-      ++stats_.rejected;
-    }
+    match = verify_first(*kf, good, /*at_end=*/true);
   }
   if (!match) return;
   {
@@ -209,18 +203,26 @@ std::unique_ptr<LoopCloser::LoopMatch> LoopCloser::detect(KeyFrame& kf) {
   // the run's last keyframe at 7148 matched other candidates that failed verification).
   if (!consistency_.one_short().empty()) {
     end_query_ = kf.shared_from_this();
-    end_candidates_ = consistency_.one_short();
+    end_candidates_.clear();
+    for (long id : consistency_.one_short()) end_candidates_.push_back(by_id.at(id)->shared_from_this());
     end_check_ = consistency_checks_;
   }
-  for (long id : accepted) {
+  std::vector<KeyFrame*> consistent;
+  for (long id : accepted) consistent.push_back(by_id.at(id));
+  auto m = verify_first(kf, consistent, /*at_end=*/false);
+  if (m) end_candidates_.clear();  // a loop closed after it: nothing is left open
+  return m;
+}
+
+std::unique_ptr<LoopCloser::LoopMatch> LoopCloser::verify_first(KeyFrame& kf, const std::vector<KeyFrame*>& candidates,
+                                                                bool at_end) {
+  for (KeyFrame* c : candidates) {
     {
       std::lock_guard s(stats_mutex_);
       ++stats_.consistent_candidates;
+      stats_.end_candidates += at_end;
     }
-    if (auto m = verify(kf, *by_id.at(id))) {
-      end_candidates_.clear();  // a loop closed after it: nothing is left open
-      return m;
-    }
+    if (auto m = verify(kf, *c)) return m;
     std::lock_guard s(stats_mutex_);
     ++stats_.rejected;
   }

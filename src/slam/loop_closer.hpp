@@ -185,7 +185,7 @@ class LoopCloser {
   // The newest keyframe whose candidates fell one short of consistency, and those candidates
   // (close_at_end); cleared when a loop closes after it.
   std::weak_ptr<KeyFrame> end_query_;
-  std::vector<long> end_candidates_;
+  std::vector<std::weak_ptr<KeyFrame>> end_candidates_;
   long consistency_checks_ = 0;  // keyframes checked for consistency so far
   long end_check_ = 0;           // ... when end_query_ was
   long last_loop_kf_id_ = -1000000;
@@ -202,6 +202,9 @@ class LoopCloser {
   // Map lock held.
   std::unique_ptr<LoopMatch> detect(KeyFrame& kf);
   std::unique_ptr<LoopMatch> verify(KeyFrame& kf, KeyFrame& candidate);
+  // The first candidate that verify accepts, counting each tried (stats: consistent_candidates,
+  // end_candidates when at_end, rejected).
+  std::unique_ptr<LoopMatch> verify_first(KeyFrame& kf, const std::vector<KeyFrame*>& candidates, bool at_end);
   void correct(const std::shared_ptr<KeyFrame>& kf, const LoopMatch& match);
   void close_at_end();
   void stop_global_ba();

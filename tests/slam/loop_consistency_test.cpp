@@ -64,6 +64,8 @@ TEST(LoopConsistency, ThePlaceRecognisedOnOneKeyframeTooFewIsOneShort) {
   EXPECT_TRUE(lc.one_short().empty());
   lc.update({C{5, {4, 6}}});
   lc.update({C{5, {4, 6}}});
+  lc.update({C{5, {4, 6}}});
+  ASSERT_EQ(lc.one_short(), std::vector<long>{5});  // the chain begun again after the gap
   lc.reset();
   EXPECT_TRUE(lc.one_short().empty());
   // With one consistent keyframe required, every new place is one short.
