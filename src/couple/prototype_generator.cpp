@@ -245,7 +245,8 @@ GeneratedStub generate_model_stub(const ModelConfig& cfg, std::vector<fs::path> 
      << "set(lcm_out ${CMAKE_CURRENT_BINARY_DIR}/lcmtypes)\n"
      << "add_custom_command(OUTPUT ${lcm_out}/stamp\n"
      << "  COMMAND ${LCM_GEN} --cpp --cpp-hpath ${lcm_out} ${lcm_files}\n"
-     << "  COMMAND ${CMAKE_COMMAND} -E touch ${lcm_out}/stamp\n  DEPENDS ${lcm_files})\n"
+     << "  COMMAND ${CMAKE_COMMAND} -E touch ${lcm_out}/stamp\n  DEPENDS ${lcm_files}\n"
+     << "  VERBATIM)\n"  // arguments escaped for the shell: a folder may hold spaces or quotes
      << "add_custom_target(" << N << "_lcmtypes DEPENDS ${lcm_out}/stamp)\n"
      << "add_library(" << N << " MODULE " << N << ".cpp " << N << "_glue.cpp)\n"
      << "add_dependencies(" << N << " " << N << "_lcmtypes)\n"

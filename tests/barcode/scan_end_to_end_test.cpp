@@ -10,10 +10,12 @@
 #include "barcode/scan_pipeline.hpp"
 #include "synth/warehouse_scene.hpp"
 #include "../common/scratch_dir.hpp"
+#include "../common/shell_quote.hpp"
 
 namespace builtscene::barcode {
 namespace {
 namespace fs = std::filesystem;
+using builtscene::testing::shell_quote;
 
 struct GeneratedScan : public ::testing::Test {
   static void SetUpTestSuite() {
@@ -78,24 +80,24 @@ TEST_F(GeneratedScan, OutputIsIdenticalForAnyThreadCount) {
 }
 
 int run(const std::string& args) {
-  const std::string cmd = std::string(BUILTSCENE_BINARY) + " " + args + " > /dev/null 2>&1";
+  const std::string cmd = shell_quote(BUILTSCENE_BINARY) + " " + args + " > /dev/null 2>&1";
   const int status = std::system(cmd.c_str());
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
 
 TEST_F(GeneratedScan, CliExitCodes) {
-  EXPECT_EQ(run("barcodes scan --video " + (dir / "missing.avi").string() + " --out " + (dir / "cli").string()), 2);
-  EXPECT_EQ(run("barcodes scan --video " + (dir / "scan.avi").string() + " --out " + (dir / "cli").string() +
+  EXPECT_EQ(run("barcodes scan --video " + shell_quote(dir / "missing.avi") + " --out " + shell_quote(dir / "cli")), 2);
+  EXPECT_EQ(run("barcodes scan --video " + shell_quote(dir / "scan.avi") + " --out " + shell_quote(dir / "cli") +
                 " --region 1.7"),
             2);
-  EXPECT_EQ(run("barcodes eval --truth " + (dir / "truth.csv").string() + " --inventory " +
-                (dir / "nothing.csv").string()),
+  EXPECT_EQ(run("barcodes eval --truth " + shell_quote(dir / "truth.csv") + " --inventory " +
+                shell_quote(dir / "nothing.csv")),
             2);
-  ASSERT_EQ(run("barcodes scan --video " + (dir / "scan.avi").string() + " --out " + (dir / "cli").string() +
+  ASSERT_EQ(run("barcodes scan --video " + shell_quote(dir / "scan.avi") + " --out " + shell_quote(dir / "cli") +
                 " --keyframes 0.9 --json"),
             0);
-  EXPECT_EQ(run("barcodes eval --truth " + (dir / "truth.csv").string() + " --inventory " +
-                (dir / "cli" / "inventory.csv").string() + " --json"),
+  EXPECT_EQ(run("barcodes eval --truth " + shell_quote(dir / "truth.csv") + " --inventory " +
+                shell_quote(dir / "cli" / "inventory.csv") + " --json"),
             0);
 }
 

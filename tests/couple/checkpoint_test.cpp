@@ -19,7 +19,9 @@ using nlohmann::json;
 
 namespace {
 
-const std::string kBin = BUILTSCENE_BINARY;
+using builtscene::testing::shell_quote;
+
+const std::string kBin = shell_quote(BUILTSCENE_BINARY);
 
 // y_n = sum over i <= n of x_i with x_i = 0.5 i + 1 (exact in binary floating point).
 double closed_form(int64_t n) {
@@ -78,8 +80,8 @@ TEST(Checkpoint, AKilledModelResumesFromItsCheckpointAndTheResultsAreIdentical) 
                                "subscribe:\n  - {channel: X, type: cp.x_t}\npublish:\n  - {channel: Y, type: cp.y_t}\n";
   couple_test::write(d / "acc.yaml", acc_yaml);
   // The stub from the generator, with the body (and the optional hooks) filled in.
-  const auto gen = couple_test::run(kBin + " couple new-model --config " + (d / "acc.yaml").string() + " --out " +
-                                    (d / "stub").string());
+  const auto gen = couple_test::run(kBin + " couple new-model --config " + shell_quote(d / "acc.yaml") + " --out " +
+                                    shell_quote(d / "stub"));
   ASSERT_EQ(gen.code, 0) << gen.out;
   std::stringstream header;
   header << std::ifstream(d / "stub" / "acc_model.hpp").rdbuf();
@@ -87,7 +89,7 @@ TEST(Checkpoint, AKilledModelResumesFromItsCheckpointAndTheResultsAreIdentical) 
       << header.str();
   EXPECT_NE(header.str().find("bool acc_load(AccState& state, const std::string& bytes);"), std::string::npos);
   couple_test::write(d / "stub" / "acc.cpp", kAccBody);
-  const auto build = couple_test::run("cd " + (d / "stub").string() +
+  const auto build = couple_test::run("cd " + shell_quote(d / "stub") +
                                       " && timeout 120 cmake -S . -B build -DCMAKE_BUILD_TYPE=Release > /dev/null"
                                       " && timeout 120 cmake --build build");
   ASSERT_EQ(build.code, 0) << build.out;
@@ -97,10 +99,10 @@ TEST(Checkpoint, AKilledModelResumesFromItsCheckpointAndTheResultsAreIdentical) 
                        std::regex_replace(acc_yaml, std::regex("TRACE"), (d / (tag + ".trace")).string()));
     couple_test::write(d / ("scenario-" + tag + ".yaml"),
                        "name: cp\ntransport: mediator\ntimeout: 10\nmodels: [src.yaml, acc-" + tag + ".yaml]\n");
-    return couple_test::run("{ TMPDIR=" + d.string() + " " + kBin + " couple launch " +
-                            (d / ("scenario-" + tag + ".yaml")).string() + " --record " +
-                            (d / (tag + ".lcmlog")).string() + " --json " + extra + " > " +
-                            (d / (tag + ".json")).string() + "; }");
+    return couple_test::run("{ TMPDIR=" + shell_quote(d) + " " + kBin + " couple launch " +
+                            shell_quote(d / ("scenario-" + tag + ".yaml")) + " --record " +
+                            shell_quote(d / (tag + ".lcmlog")) + " --json " + extra + " > " +
+                            shell_quote(d / (tag + ".json")) + "; }");
   };
   const auto a = run("a", "");
   ASSERT_EQ(a.code, 0) << a.out;
@@ -154,10 +156,10 @@ TEST(Checkpoint, AKilledExternalJsonLinesModelResumesFromItsCheckpoint) {
                            "}\nsubscribe:\n  - {channel: X, type: cp.x_t}\npublish:\n  - {channel: Y, type: cp.y_t}\n");
     couple_test::write(d / ("scenario-" + tag + ".yaml"),
                        "name: cp\ntransport: mediator\ntimeout: 10\nmodels: [src.yaml, acc-" + tag + ".yaml]\n");
-    return couple_test::run("{ TMPDIR=" + d.string() + " " + kBin + " couple launch " +
-                            (d / ("scenario-" + tag + ".yaml")).string() + " --record " +
-                            (d / (tag + ".lcmlog")).string() + " --json " + extra + " > " +
-                            (d / (tag + ".json")).string() + "; }");
+    return couple_test::run("{ TMPDIR=" + shell_quote(d) + " " + kBin + " couple launch " +
+                            shell_quote(d / ("scenario-" + tag + ".yaml")) + " --record " +
+                            shell_quote(d / (tag + ".lcmlog")) + " --json " + extra + " > " +
+                            shell_quote(d / (tag + ".json")) + "; }");
   };
   const auto a = run("a", "");
   ASSERT_EQ(a.code, 0) << a.out;
@@ -191,7 +193,8 @@ TEST(Checkpoint, AnExternalModelThatCannotSaveStopsTheRunWithItsName) {
   couple_test::write(d / "bad.yaml", "name: bad\ndt: 0.1\nend_time: 10\nmessages: types.lcm\ncommand: [python3, bad.py]\n"
                                      "checkpoint_every: 10\npublish:\n  - {channel: Y, type: cp.y_t}\n");
   couple_test::write(d / "scenario.yaml", "name: cp\ntransport: mediator\ntimeout: 10\nmodels: [bad.yaml]\n");
-  const auto r = couple_test::run("{ TMPDIR=" + d.string() + " " + kBin + " couple launch " + (d / "scenario.yaml").string() + "; }");
+  const auto r = couple_test::run("{ TMPDIR=" + shell_quote(d) + " " + kBin + " couple launch " +
+                                  shell_quote(d / "scenario.yaml") + "; }");
   EXPECT_EQ(r.code, 1) << r.out;
   EXPECT_NE(r.out.find("model 'bad' could not save its checkpoint: no 'state' in its reply {\"nope\":1}"), std::string::npos)
       << r.out;

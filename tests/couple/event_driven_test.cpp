@@ -28,7 +28,9 @@ using nlohmann::json;
 
 namespace {
 
-const std::string kBin = BUILTSCENE_BINARY;
+using builtscene::testing::shell_quote;
+
+const std::string kBin = shell_quote(BUILTSCENE_BINARY);
 constexpr int64_t kSteps = 1500;  // plant and controller (dt 0.01); the logger runs half as many (dt 0.02)
 
 // plant:      x(n) = x(n-1) + 1 - 2 * level, level the newest CMD event up to step n
@@ -229,8 +231,8 @@ TEST(EventDriven, OverTheMediatorNoModelReceivesAMessageBeforeItsGrant) {
   const auto d = couple_test::temp_dir("ev_mediator");
   const auto scenario = write_scenario(d, "mediator");
   const std::string log = (d / "run.lcmlog").string();
-  const auto r = couple_test::run("{ TMPDIR=" + d.string() + " " + kBin + " couple launch " + scenario.string() +
-                                  " --record " + log + " --json > " + (d / "out.json").string() + "; }");
+  const auto r = couple_test::run("{ TMPDIR=" + shell_quote(d) + " " + kBin + " couple launch " + shell_quote(scenario) +
+                                  " --record " + shell_quote(log) + " --json > " + shell_quote(d / "out.json") + "; }");
   ASSERT_EQ(r.code, 0) << r.out;
   const ScenarioConfig sc = load_scenario(scenario);
   std::string first;

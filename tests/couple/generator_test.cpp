@@ -18,6 +18,8 @@ using nlohmann::json;
 
 namespace {
 
+using builtscene::testing::shell_quote;
+
 const char* kTypes = R"(package gen;
 struct in_t { int64_t step; double x; int32_t n; float v[n]; string label; }
 struct hist_t { int64_t step; double h; }
@@ -67,8 +69,8 @@ TEST(PrototypeGenerator, StubBuildsWithCmakeAndTheWrapperCallsIt) {
   const auto d = couple_test::temp_dir("generator");
   couple_test::write(d / "types.lcm", kTypes);
   couple_test::write(d / "scaler.yaml", kConfig);
-  const auto gen = couple_test::run(std::string(BUILTSCENE_BINARY) + " couple new-model --config " +
-                                    (d / "scaler.yaml").string() + " --out " + (d / "stub").string() + " --json");
+  const auto gen = couple_test::run(shell_quote(BUILTSCENE_BINARY) + " couple new-model --config " +
+                                    shell_quote(d / "scaler.yaml") + " --out " + shell_quote(d / "stub") + " --json");
   ASSERT_EQ(gen.code, 0) << gen.out;
   // The prototype names the model and lists every variable (x and label clash with outputs).
   std::ifstream h(d / "stub" / "scaler_model.hpp");
@@ -81,7 +83,7 @@ TEST(PrototypeGenerator, StubBuildsWithCmakeAndTheWrapperCallsIt) {
     EXPECT_NE(header.find(part), std::string::npos) << part << "\n" << header;
   // The untouched stub builds, as does the filled-in one (the user's edit).
   auto build = [&](const std::string& tag) {
-    return couple_test::run("cd " + (d / "stub").string() + " && timeout 120 cmake -S . -B build-" + tag +
+    return couple_test::run("cd " + shell_quote(d / "stub") + " && timeout 120 cmake -S . -B build-" + tag +
                             " -DCMAKE_BUILD_TYPE=Release > /dev/null && timeout 120 cmake --build build-" + tag);
   };
   const auto plain = build("plain");
@@ -114,14 +116,14 @@ TEST(PrototypeGenerator, PythonStubSpeaksJsonLines) {
   const auto d = couple_test::temp_dir("generator_py");
   couple_test::write(d / "types.lcm", kTypes);
   couple_test::write(d / "scaler.yaml", kConfig);
-  ASSERT_EQ(couple_test::run(std::string(BUILTSCENE_BINARY) + " couple new-model --config " +
-                             (d / "scaler.yaml").string() + " --out " + (d / "stub").string()).code,
+  ASSERT_EQ(couple_test::run(shell_quote(BUILTSCENE_BINARY) + " couple new-model --config " +
+                             shell_quote(d / "scaler.yaml") + " --out " + shell_quote(d / "stub")).code,
             0);
   const auto r = couple_test::run(
       "printf '%s\\n' '{\"init\": {\"offset\": 1}}' "
       "'{\"step\": 0, \"t\": 0, \"inputs\": {\"IN\": [{\"x\": 1, \"n\": 0, \"v\": [], \"label\": \"a\"}], "
       "\"HIST\": [{\"h\": 0}, {\"h\": 0}, {\"h\": 0}]}}' '{\"save\": true}' '{\"load\": null}' | python3 " +
-      (d / "stub" / "scaler.py").string());
+      shell_quote(d / "stub" / "scaler.py"));
   ASSERT_EQ(r.code, 0) << r.out;
   std::istringstream lines(r.out);
   std::string l1, l2, l3, l4;

@@ -20,7 +20,9 @@ using nlohmann::json;
 
 namespace {
 
-const std::string kBin = BUILTSCENE_BINARY;
+using builtscene::testing::shell_quote;
+
+const std::string kBin = shell_quote(BUILTSCENE_BINARY);
 const std::string kScenario = couple_test::kExample + "/scenario-hybrid.yaml";
 
 double rel(double a, double b) { return a == b ? 0 : std::abs(a - b) / std::max(std::abs(a), std::abs(b)); }
@@ -52,8 +54,8 @@ double worst_difference(std::map<std::string, std::map<int64_t, json>>& got, con
 
 TEST(Hybrid, ExampleOverLcmAndTheMediatorEqualsTheMonolithicReference) {
   const auto dir = couple_test::temp_dir("hybrid_example");
-  UDPM_OR_SKIP(r, "TMPDIR=" + dir.string() + " " + kBin + " couple launch " + kScenario + " --record " +
-                      (dir / "run.lcmlog").string() + " --json > " + (dir / "out.json").string());
+  UDPM_OR_SKIP(r, "TMPDIR=" + shell_quote(dir) + " " + kBin + " couple launch " + shell_quote(kScenario) +
+                      " --record " + shell_quote(dir / "run.lcmlog") + " --json > " + shell_quote(dir / "out.json"));
   ASSERT_EQ(r->code, 0) << r->out;
   const json summary = json::parse(std::ifstream(dir / "out.json"));
   EXPECT_EQ(summary["steps"], 6000);
@@ -79,14 +81,19 @@ TEST(Hybrid, LocalChannelsTravelOnlyOverLcmAndTheOthersThroughTheMediator) {
   const std::string d = dir.string(), err = d + "/spy.err";
   // Every background process is stopped on any way out (set -e) and keeps no handle on
   // the test's output pipe.
-  UDPM_OR_SKIP(r, "nats-server -a 127.0.0.1 -p 4222 -js -sd " + d + "/js -l " + d + "/server.log > /dev/null 2>&1 & N=$!\n"
+  UDPM_OR_SKIP(r, "nats-server -a 127.0.0.1 -p 4222 -js -sd " + shell_quote(d + "/js") + " -l " +
+                  shell_quote(d + "/server.log") + " > /dev/null 2>&1 & N=$!\n"
                   "trap 'kill $N $L $S 2>/dev/null || true' EXIT\n"
-                  "for i in $(seq 100); do grep -q 'Server is ready' " + d + "/server.log 2>/dev/null && break; sleep 0.1; done\n"
-                  "lcm-logger --lcm-url='udpm://239.255.76.67:7668?ttl=0' -f " + d + "/local.lcmlog > /dev/null 2>&1 & L=$!\n" +
-                  kBin + " couple spy --url nats://127.0.0.1:4222 --scenario " + kScenario + " --duration 120 --json > " +
-                  d + "/spy.json 2> " + err + " & S=$!\n"
-                  "for i in $(seq 300); do grep -q listening " + err + " && break; sleep 0.1; done\nsleep 0.3\n" +
-                  kBin + " couple launch " + kScenario + " --nats nats://127.0.0.1:4222 --json > " + d + "/out.json\n"
+                  "for i in $(seq 100); do grep -q 'Server is ready' " + shell_quote(d + "/server.log") +
+                  " 2>/dev/null && break; sleep 0.1; done\n"
+                  "lcm-logger --lcm-url='udpm://239.255.76.67:7668?ttl=0' -f " + shell_quote(d + "/local.lcmlog") +
+                  " > /dev/null 2>&1 & L=$!\n" +
+                  kBin + " couple spy --url nats://127.0.0.1:4222 --scenario " + shell_quote(kScenario) +
+                  " --duration 120 --json > " + shell_quote(d + "/spy.json") + " 2> " + shell_quote(err) + " & S=$!\n"
+                  "for i in $(seq 300); do grep -q listening " + shell_quote(err) +
+                  " && break; sleep 0.1; done\nsleep 0.3\n" +
+                  kBin + " couple launch " + shell_quote(kScenario) + " --nats nats://127.0.0.1:4222 --json > " +
+                  shell_quote(d + "/out.json") + "\n"
                   "sleep 0.5\nkill -INT $S\nwait $S\nkill -INT $L\nwait $L || true\nkill $N\nwait $N || true\n");
   ASSERT_EQ(r->code, 0) << r->out;
   const json spy = json::parse(std::ifstream(dir / "spy.json"));
@@ -128,13 +135,15 @@ TEST(Hybrid, AKilledSubModelRestartsWithItsGroupAndTheResultsAreIdentical) {
   // the mediator and re-send their local steps to each other. Compared with an
   // uninterrupted run (exported CSVs byte for byte) and the monolithic reference.
   const auto dir = couple_test::temp_dir("hybrid_kill");
-  const std::string d = dir.string(), launch = "TMPDIR=" + d + " " + kBin + " couple launch " + kScenario;
+  const std::string d = dir.string(),
+                    launch = "TMPDIR=" + shell_quote(d) + " " + kBin + " couple launch " + shell_quote(kScenario);
   auto csv = [&](const std::string& tag) {
-    return kBin + " couple export " + d + "/" + tag + ".lcmlog --scenario " + kScenario + " --csv " + d + "/" + tag +
-           " > /dev/null\n";
+    return kBin + " couple export " + shell_quote(d + "/" + tag + ".lcmlog") + " --scenario " + shell_quote(kScenario) +
+           " --csv " + shell_quote(d + "/" + tag) + " > /dev/null\n";
   };
-  UDPM_OR_SKIP(r, launch + " --record " + d + "/a.lcmlog > /dev/null\n" + csv("a") + launch +
-                      " --kill controller@3000 --record " + d + "/b.lcmlog --json > " + d + "/b.json\n" + csv("b"));
+  UDPM_OR_SKIP(r, launch + " --record " + shell_quote(d + "/a.lcmlog") + " > /dev/null\n" + csv("a") + launch +
+                      " --kill controller@3000 --record " + shell_quote(d + "/b.lcmlog") + " --json > " +
+                      shell_quote(d + "/b.json") + "\n" + csv("b"));
   ASSERT_EQ(r->code, 0) << r->out;
   EXPECT_NE(r->out.find("model 'controller' was killed by signal Killed at step"), std::string::npos) << r->out;
   EXPECT_NE(r->out.find("restarting its group 'building'"), std::string::npos) << r->out;
@@ -145,8 +154,8 @@ TEST(Hybrid, AKilledSubModelRestartsWithItsGroupAndTheResultsAreIdentical) {
   for (const std::string ch : {"WIND", "STRUCTURE", "CONTROL"}) {
     const auto fa = dir / "a" / (ch + ".csv"), fb = dir / "b" / (ch + ".csv");
     ASSERT_TRUE(std::filesystem::exists(fb)) << fb;
-    EXPECT_EQ(couple_test::run("wc -l < " + fa.string()).out, "6001\n") << ch;
-    EXPECT_EQ(couple_test::run("cmp " + fa.string() + " " + fb.string()).code, 0) << ch << " differs";
+    EXPECT_EQ(couple_test::run("wc -l < " + shell_quote(fa)).out, "6001\n") << ch;
+    EXPECT_EQ(couple_test::run("cmp " + shell_quote(fa) + " " + shell_quote(fb)).code, 0) << ch << " differs";
   }
   auto got = couple_test::read_log(dir / "b.lcmlog", load_scenario(kScenario));
   std::size_t compared = 0, missing = 0;

@@ -23,7 +23,9 @@ using nlohmann::json;
 
 namespace {
 
-const std::string kBin = BUILTSCENE_BINARY;
+using builtscene::testing::shell_quote;
+
+const std::string kBin = shell_quote(BUILTSCENE_BINARY);
 
 double rel(double a, double b) { return a == b ? 0 : std::abs(a - b) / std::max(std::abs(a), std::abs(b)); }
 
@@ -110,13 +112,13 @@ Conformance check_grants(const std::filesystem::path& log, const ScenarioConfig&
 // Runs `cmd` with TMPDIR in `dir`; braces keep the caller's stdout redirection apart
 // from run()'s 2>&1.
 std::string in_tmp(const std::filesystem::path& dir, const std::string& cmd) {
-  return "{ TMPDIR=" + dir.string() + " " + cmd + "; }";
+  return "{ TMPDIR=" + shell_quote(dir) + " " + cmd + "; }";
 }
 
 // Runs a multi-line shell script (run() redirects only a single command's stderr).
 couple_test::RunResult run_script(const std::filesystem::path& dir, const std::string& script) {
   couple_test::write(dir / "run.sh", script);
-  return couple_test::run("sh " + (dir / "run.sh").string());
+  return couple_test::run("sh " + shell_quote(dir / "run.sh"));
 }
 
 }  // namespace
@@ -124,9 +126,9 @@ couple_test::RunResult run_script(const std::filesystem::path& dir, const std::s
 TEST(Mediator, ExampleOverALaunchedServerEqualsTheMonolithicReference) {
   const auto dir = couple_test::temp_dir("mediator_example");
   const std::string scenario = couple_test::kExample + "/scenario-mediator.yaml";
-  const auto r = couple_test::run(in_tmp(dir, kBin + " couple launch " + scenario + " --record " +
-                                                  (dir / "run.lcmlog").string() + " --json > " +
-                                                  (dir / "out.json").string()));
+  const auto r = couple_test::run(in_tmp(dir, kBin + " couple launch " + shell_quote(scenario) + " --record " +
+                                                  shell_quote(dir / "run.lcmlog") + " --json > " +
+                                                  shell_quote(dir / "out.json")));
   ASSERT_EQ(r.code, 0) << r.out;
   const json summary = json::parse(std::ifstream(dir / "out.json"));
   EXPECT_EQ(summary["steps"], 6000);
@@ -162,11 +164,12 @@ TEST(Mediator, NatsOptionUsesARunningServer) {
   const std::string ports = (dir / "ports").string();
   std::filesystem::create_directories(ports);
   const auto r = run_script(dir,
-      "nats-server -a 127.0.0.1 -p -1 --ports_file_dir " + ports + " -l " + (dir / "server.log").string() +
-      " & S=$!\nfor i in $(seq 100); do ls " + ports + "/*.ports >/dev/null 2>&1 && break; sleep 0.1; done\n"
-      "URL=$(sed 's/.*\\[\"\\([^\"]*\\)\".*/\\1/' " + ports + "/*.ports)\n" +
-      in_tmp(dir, kBin + " couple launch " + scenario + " --nats \"$URL?prefix=run1\" --record " +
-                      (dir / "run.lcmlog").string() + " --json > " + (dir / "out.json").string()) +
+      "nats-server -a 127.0.0.1 -p -1 --ports_file_dir " + shell_quote(ports) + " -l " +
+      shell_quote(dir / "server.log") + " & S=$!\nfor i in $(seq 100); do ls " + shell_quote(ports) +
+      "/*.ports >/dev/null 2>&1 && break; sleep 0.1; done\n"
+      "URL=$(sed 's/.*\\[\"\\([^\"]*\\)\".*/\\1/' " + shell_quote(ports) + "/*.ports)\n" +
+      in_tmp(dir, kBin + " couple launch " + shell_quote(scenario) + " --nats \"$URL?prefix=run1\" --record " +
+                      shell_quote(dir / "run.lcmlog") + " --json > " + shell_quote(dir / "out.json")) +
       "\nrc=$?\nkill -0 $S && echo server-still-running\nkill $S\nwait $S\nexit $rc\n");
   ASSERT_EQ(r.code, 0) << r.out;
   EXPECT_NE(r.out.find("server-still-running"), std::string::npos) << r.out;
@@ -198,8 +201,9 @@ TEST(Mediator, CtrlCStopsTheModelsAndTheServer) {
   couple_test::write(d / "scenario.yaml", "name: s\ntransport: mediator\ntimeout: 5\nmodels: [p.yaml, c.yaml]\n");
   const std::string log = (d / "run.lcmlog").string();
   const auto r = run_script(d,
-      in_tmp(d, kBin + " couple launch " + (d / "scenario.yaml").string() + " --record " + log) +
-      " & P=$!\nfor i in $(seq 300); do [ $(stat -c %s " + log + " 2>/dev/null || echo 0) -gt 65536 ] && break; sleep 0.1; done\n"
+      in_tmp(d, kBin + " couple launch " + shell_quote(d / "scenario.yaml") + " --record " + shell_quote(log)) +
+      " & P=$!\nfor i in $(seq 300); do [ $(stat -c %s " + shell_quote(log) +
+      " 2>/dev/null || echo 0) -gt 65536 ] && break; sleep 0.1; done\n"
       "kill -INT $P\nwait $P\necho rc=$?\n");
   EXPECT_NE(r.out.find("interrupted"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("rc=1"), std::string::npos) << r.out;
@@ -212,12 +216,12 @@ TEST(Mediator, CtrlCStopsTheModelsAndTheServer) {
 TEST(Mediator, AnUnreachableServerIsAClearError) {
   const auto dir = couple_test::temp_dir("mediator_unreachable");
   // Port 1 on loopback: nothing listens there (tcpmux is never served here).
-  const auto r = couple_test::run(kBin + " couple launch " + couple_test::kExample +
+  const auto r = couple_test::run(kBin + " couple launch " + shell_quote(couple_test::kExample) +
                                   "/scenario-mediator.yaml --nats nats://127.0.0.1:1");
   EXPECT_EQ(r.code, 1) << r.out;
   EXPECT_NE(r.out.find("cannot connect to the mediator (NATS server) at nats://127.0.0.1:1"), std::string::npos)
       << r.out;
-  const auto bad = couple_test::run(kBin + " couple launch " + couple_test::kExample +
+  const auto bad = couple_test::run(kBin + " couple launch " + shell_quote(couple_test::kExample) +
                                     "/scenario-mediator.yaml --nats udpm://239.255.76.67:7667");
   EXPECT_EQ(bad.code, 2) << bad.out;
   EXPECT_NE(bad.out.find("--nats 'udpm://239.255.76.67:7667': expected nats://HOST:PORT"), std::string::npos)
@@ -246,7 +250,7 @@ TEST(Mediator, AStalledModelIsReportedByName) {
   // (through a pyenv shim) on a loaded 2-core machine, and the report then came at step 0,
   // before 'sink' had blocked (one clean-clone CI run, 2026-12-01).
   couple_test::write(d / "scenario.yaml", "name: p\ntransport: mediator\ntimeout: 5\nmodels: [src.yaml, sink.yaml, end.yaml]\n");
-  const auto r = couple_test::run(in_tmp(d, kBin + " couple launch " + (d / "scenario.yaml").string()));
+  const auto r = couple_test::run(in_tmp(d, kBin + " couple launch " + shell_quote(d / "scenario.yaml")));
   EXPECT_EQ(r.code, 1) << r.out;
   EXPECT_NE(r.out.find("no model advanced for 5 s"), std::string::npos) << r.out;
   // 'sink' is stuck computing step 5; 'end' waits for a step of it (5, or the one of
@@ -260,18 +264,18 @@ TEST(Mediator, AStalledModelIsReportedByName) {
 TEST(Mediator, KilledModelsAreRestartedAndTheResultsAreBitIdentical) {
   const auto dir = couple_test::temp_dir("mediator_kill");
   const std::string scenario = couple_test::kExample + "/scenario-mediator.yaml";
-  const std::string launch = kBin + " couple launch " + scenario;
+  const std::string launch = kBin + " couple launch " + shell_quote(scenario);
   // The uninterrupted run, then one where the structure is killed at step 3000 and the
   // controller at step 4500 (each resumes by replaying its inputs from JetStream).
-  const auto a = run_script(dir, in_tmp(dir, launch + " --record " + (dir / "a.lcmlog").string() + " > /dev/null") +
-                                     "\n" + kBin + " couple export " + (dir / "a.lcmlog").string() + " --scenario " +
-                                     scenario + " --csv " + (dir / "a").string() + " > /dev/null\n");
+  const auto a = run_script(dir, in_tmp(dir, launch + " --record " + shell_quote(dir / "a.lcmlog") + " > /dev/null") +
+                                     "\n" + kBin + " couple export " + shell_quote(dir / "a.lcmlog") + " --scenario " +
+                                     shell_quote(scenario) + " --csv " + shell_quote(dir / "a") + " > /dev/null\n");
   ASSERT_EQ(a.code, 0) << a.out;
   const auto b = run_script(dir, in_tmp(dir, launch + " --kill structure@3000 --kill controller@4500 --record " +
-                                                 (dir / "b.lcmlog").string() + " --json > " +
-                                                 (dir / "b.json").string()) +
-                                     "\n" + kBin + " couple export " + (dir / "b.lcmlog").string() + " --scenario " +
-                                     scenario + " --csv " + (dir / "b").string() + " > /dev/null\n");
+                                                 shell_quote(dir / "b.lcmlog") + " --json > " +
+                                                 shell_quote(dir / "b.json")) +
+                                     "\n" + kBin + " couple export " + shell_quote(dir / "b.lcmlog") + " --scenario " +
+                                     shell_quote(scenario) + " --csv " + shell_quote(dir / "b") + " > /dev/null\n");
   ASSERT_EQ(b.code, 0) << b.out;
   EXPECT_NE(b.out.find("model 'structure' was killed by signal Killed at step"), std::string::npos) << b.out;
   EXPECT_NE(b.out.find("model 'controller' was killed by signal Killed at step"), std::string::npos) << b.out;
@@ -282,8 +286,8 @@ TEST(Mediator, KilledModelsAreRestartedAndTheResultsAreBitIdentical) {
   for (const std::string ch : {"WIND", "STRUCTURE", "CONTROL"}) {
     const auto fa = dir / "a" / (ch + ".csv"), fb = dir / "b" / (ch + ".csv");
     ASSERT_TRUE(std::filesystem::exists(fb)) << fb;
-    EXPECT_EQ(couple_test::run("wc -l < " + fa.string()).out, "6001\n") << ch;  // header + 6000 steps
-    EXPECT_EQ(couple_test::run("cmp " + fa.string() + " " + fb.string()).code, 0) << ch << " differs";
+    EXPECT_EQ(couple_test::run("wc -l < " + shell_quote(fa)).out, "6001\n") << ch;  // header + 6000 steps
+    EXPECT_EQ(couple_test::run("cmp " + shell_quote(fa) + " " + shell_quote(fb)).code, 0) << ch << " differs";
   }
   // And the interrupted run still equals the monolithic reference.
   std::size_t compared = 0;
@@ -292,7 +296,7 @@ TEST(Mediator, KilledModelsAreRestartedAndTheResultsAreBitIdentical) {
 }
 
 TEST(Mediator, BadKillOptionsAreClearErrors) {
-  const std::string launch = kBin + " couple launch " + couple_test::kExample;
+  const std::string launch = kBin + " couple launch " + shell_quote(couple_test::kExample);
   auto r = couple_test::run(launch + "/scenario-mediator.yaml --kill nobody@5");
   EXPECT_EQ(r.code, 2) << r.out;
   EXPECT_NE(r.out.find("no model named 'nobody'"), std::string::npos) << r.out;
@@ -312,10 +316,10 @@ TEST(Mediator, SeveralModelsPerProcessEqualTheMonolithicReferenceAndRestartToget
   // step 3000 takes the wind with it (one process); both restart and resume.
   const auto dir = couple_test::temp_dir("mediator_per_process");
   const std::string scenario = couple_test::kExample + "/scenario-mediator.yaml";
-  const auto r = couple_test::run(in_tmp(dir, kBin + " couple launch " + scenario +
+  const auto r = couple_test::run(in_tmp(dir, kBin + " couple launch " + shell_quote(scenario) +
                                                   " --models-per-process 2 --kill structure@3000 --record " +
-                                                  (dir / "run.lcmlog").string() + " --json > " +
-                                                  (dir / "out.json").string()));
+                                                  shell_quote(dir / "run.lcmlog") + " --json > " +
+                                                  shell_quote(dir / "out.json")));
   ASSERT_EQ(r.code, 0) << r.out;
   EXPECT_NE(r.out.find("model 'wind' (its process also hosts 'structure') was killed by signal Killed"), std::string::npos)
       << r.out;
@@ -328,7 +332,7 @@ TEST(Mediator, SeveralModelsPerProcessEqualTheMonolithicReferenceAndRestartToget
   EXPECT_EQ(compared, 6000u * 6);
   EXPECT_EQ(couple_test::left_over(dir), "");
   // A bad value is a clear error naming the option.
-  const auto bad = couple_test::run(kBin + " couple launch " + scenario + " --models-per-process 0");
+  const auto bad = couple_test::run(kBin + " couple launch " + shell_quote(scenario) + " --models-per-process 0");
   EXPECT_EQ(bad.code, 2) << bad.out;
   EXPECT_NE(bad.out.find("--models-per-process"), std::string::npos) << bad.out;
 }

@@ -23,7 +23,9 @@ using nlohmann::json;
 
 namespace {
 
-const std::string kBin = BUILTSCENE_BINARY;
+using builtscene::testing::shell_quote;
+
+const std::string kBin = shell_quote(BUILTSCENE_BINARY);
 
 double rel(double a, double b) { return a == b ? 0 : std::abs(a - b) / std::max(std::abs(a), std::abs(b)); }
 
@@ -50,7 +52,7 @@ std::optional<couple_test::RunResult> on_two_hosts(const std::filesystem::path& 
                      "for H in $A $B; do ip -n $H link set lo up; ip -n $H route add 224.0.0.0/4 dev lo; done\n"
                      "ip -n $A link set bsa up\nip -n $B link set bsb up\n"
                      "set +e\n" + script);
-  return couple_test::run("sh " + (dir / "hosts.sh").string());
+  return couple_test::run("sh " + shell_quote(dir / "hosts.sh"));
 }
 
 // Runs `script` with three fresh hosts $A, $B, $C (10.200.1.1, .2, .3) joined by a Linux
@@ -78,7 +80,7 @@ std::optional<couple_test::RunResult> on_three_bridged_hosts(const std::filesyst
                      "  ip -n $H addr add 10.200.1.$i/24 dev bsh$i\n  ip -n $H link set bsh$i up\n"
                      "  ip -n $H link set lo up\n  ip -n $H route add 224.0.0.0/4 dev lo\ndone\n"
                      "set +e\n" + script);
-  return couple_test::run("sh " + (dir / "hosts.sh").string());
+  return couple_test::run("sh " + shell_quote(dir / "hosts.sh"));
 }
 
 }  // namespace
@@ -88,18 +90,22 @@ TEST(MultiHost, MediatorExampleOnThreeBridgedHostsEqualsTheMonolithicReference) 
   const std::string d = dir.string(), scenario = couple_test::kExample + "/scenario-mediator.yaml";
   const std::string nats = "nats://10.200.1.1:4222";
   auto launch = [&](const std::string& host, const std::string& model, const std::string& extra) {
-    return "ip netns exec $" + host + " env TMPDIR=" + d + " " + kBin + " couple launch " + scenario + " --nats " + nats +
-           " --only " + model + extra + " --json > " + d + "/" + model + ".json";
+    return "ip netns exec $" + host + " env TMPDIR=" + shell_quote(d) + " " + kBin + " couple launch " +
+           shell_quote(scenario) + " --nats " + nats + " --only " + model + extra + " --json > " +
+           shell_quote(d + "/" + model + ".json");
   };
   std::string why;
   // nats-server and the wind on A, the structure on B, the controller on C (recording);
   // every data message crosses the bridge twice (producer -> A -> consumer).
   const auto r = on_three_bridged_hosts(dir,
-      "ip netns exec $A nats-server -a 10.200.1.1 -p 4222 -js -sd " + d + "/js -l " + d + "/server.log > /dev/null 2>&1 & N=$!\n"
-      "for i in $(seq 100); do grep -q 'Server is ready' " + d + "/server.log 2>/dev/null && break; sleep 0.1; done\n"
+      "ip netns exec $A nats-server -a 10.200.1.1 -p 4222 -js -sd " + shell_quote(d + "/js") + " -l " +
+      shell_quote(d + "/server.log") + " > /dev/null 2>&1 & N=$!\n"
+      "for i in $(seq 100); do grep -q 'Server is ready' " + shell_quote(d + "/server.log") +
+      " 2>/dev/null && break; sleep 0.1; done\n"
       "for H in $B $C; do ip netns exec $H timeout 5 bash -c 'exec 3<>/dev/tcp/10.200.1.1/4222' || echo no-route-from-$H; done\n" +
       launch("A", "wind", "") + " & LA=$!\n" + launch("B", "structure", "") + " & LB=$!\n" +
-      launch("C", "controller", " --record " + d + "/run.lcmlog") + "\nRC=$?\nwait $LA\nRA=$?\nwait $LB\nRB=$?\n"
+      launch("C", "controller", " --record " + shell_quote(d + "/run.lcmlog")) +
+      "\nRC=$?\nwait $LA\nRA=$?\nwait $LB\nRB=$?\n"
       "kill $N\nwait $N\necho rc=$RA,$RB,$RC\n",
       &why);
   if (!r) GTEST_SKIP() << why;
@@ -139,14 +145,17 @@ TEST(MultiHost, HybridExampleOnTwoNamespacedHostsEqualsTheMonolithicReference) {
   const std::string nats = "nats://10.200.0.1:4222";
   std::string why;
   const auto r = on_two_hosts(dir,
-      "ip netns exec $A nats-server -a 10.200.0.1 -p 4222 -js -sd " + d + "/js -l " + d + "/server.log > /dev/null 2>&1 & N=$!\n"
-      "for i in $(seq 100); do grep -q 'Server is ready' " + d + "/server.log 2>/dev/null && break; sleep 0.1; done\n"
+      "ip netns exec $A nats-server -a 10.200.0.1 -p 4222 -js -sd " + shell_quote(d + "/js") + " -l " +
+      shell_quote(d + "/server.log") + " > /dev/null 2>&1 & N=$!\n"
+      "for i in $(seq 100); do grep -q 'Server is ready' " + shell_quote(d + "/server.log") +
+      " 2>/dev/null && break; sleep 0.1; done\n"
       // host B must reach the server across the veth (bash's /dev/tcp: no ping needed)
       "ip netns exec $B timeout 5 bash -c 'exec 3<>/dev/tcp/10.200.0.1/4222' || echo no-route-to-A\n"
-      "ip netns exec $A env TMPDIR=" + d + " " + kBin + " couple launch " + scenario + " --nats " + nats +
-      " --only wind --json > " + d + "/a.json & LA=$!\n"
-      "ip netns exec $B env TMPDIR=" + d + " " + kBin + " couple launch " + scenario + " --nats " + nats +
-      " --only structure --only controller --record " + d + "/run.lcmlog --json > " + d + "/b.json\n"
+      "ip netns exec $A env TMPDIR=" + shell_quote(d) + " " + kBin + " couple launch " + shell_quote(scenario) +
+      " --nats " + nats + " --only wind --json > " + shell_quote(d + "/a.json") + " & LA=$!\n"
+      "ip netns exec $B env TMPDIR=" + shell_quote(d) + " " + kBin + " couple launch " + shell_quote(scenario) +
+      " --nats " + nats + " --only structure --only controller --record " + shell_quote(d + "/run.lcmlog") +
+      " --json > " + shell_quote(d + "/b.json") + "\n"
       "RB=$?\nwait $LA\nRA=$?\nkill $N\nwait $N\necho rc=$RA,$RB\n",
       &why);
   if (!r) GTEST_SKIP() << why;
@@ -181,7 +190,7 @@ TEST(MultiHost, HybridExampleOnTwoNamespacedHostsEqualsTheMonolithicReference) {
 }
 
 TEST(MultiHost, OnlyOptionBadInputIsAClearError) {
-  const std::string launch = kBin + " couple launch " + couple_test::kExample + "/scenario-hybrid.yaml";
+  const std::string launch = kBin + " couple launch " + shell_quote(couple_test::kExample + "/scenario-hybrid.yaml");
   auto r = couple_test::run(launch + " --only wind");
   EXPECT_EQ(r.code, 2) << r.out;
   EXPECT_NE(r.out.find("--only needs --nats nats://HOST:PORT"), std::string::npos) << r.out;

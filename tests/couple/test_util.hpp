@@ -9,6 +9,7 @@
 #include <string>
 
 #include "../common/scratch_dir.hpp"
+#include "../common/shell_quote.hpp"
 #include "couple/lcm_codec.hpp"
 #include "couple/lcm_log.hpp"
 #include "couple/model_config.hpp"
@@ -72,7 +73,7 @@ inline std::optional<RunResult> in_udpm_namespace(const std::string& script, std
   }
   const auto dir = temp_dir("script");
   write(dir / "run.sh", "set -e\nip link set lo up\nip route add 224.0.0.0/4 dev lo\n" + script);
-  return run("unshare -n sh " + (dir / "run.sh").string());
+  return run("unshare -n sh " + builtscene::testing::shell_quote(dir / "run.sh"));
 }
 
 #define UDPM_OR_SKIP(result, script)                           \
@@ -83,7 +84,7 @@ inline std::optional<RunResult> in_udpm_namespace(const std::string& script, std
 // Processes whose command line mentions `dir` (the pattern does not match pgrep's own shell).
 inline std::string left_over(const std::filesystem::path& dir) {
   const std::string s = dir.string();
-  return run("pgrep -af '[" + s.substr(0, 1) + "]" + s.substr(1) + "'").out;
+  return run("pgrep -af " + builtscene::testing::shell_quote("[" + s.substr(0, 1) + "]" + s.substr(1))).out;
 }
 
 }  // namespace couple_test

@@ -21,7 +21,9 @@ using nlohmann::json;
 
 namespace {
 
-const std::string kBin = BUILTSCENE_BINARY;
+using builtscene::testing::shell_quote;
+
+const std::string kBin = shell_quote(BUILTSCENE_BINARY);
 
 using couple_test::left_over;
 using couple_test::read_log;
@@ -34,8 +36,8 @@ TEST(Udpm, ExampleRunEqualsTheMonolithicReferenceWithAndWithoutControl) {
   for (const std::string file : {"scenario.yaml", "scenario-no-control.yaml"}) {
     const auto dir = couple_test::temp_dir("udpm_example");
     const std::string scenario = couple_test::kExample + "/" + file;
-    UDPM_OR_SKIP(r, kBin + " couple launch " + scenario + " --record " + (dir / "run.lcmlog").string() +
-                        " --json > " + (dir / "out.json").string());
+    UDPM_OR_SKIP(r, kBin + " couple launch " + shell_quote(scenario) + " --record " + shell_quote(dir / "run.lcmlog") +
+                        " --json > " + shell_quote(dir / "out.json"));
     ASSERT_EQ(r->code, 0) << r->out;
     const json summary = json::parse(std::ifstream(dir / "out.json"));
     EXPECT_EQ(summary["steps"], 6000);
@@ -73,10 +75,10 @@ TEST(Udpm, ExampleRunEqualsTheMonolithicReferenceWithAndWithoutControl) {
 TEST(Udpm, LcmLogplayerReplaysTheRecordedLogToLcmLogger) {
   const auto dir = couple_test::temp_dir("replay");
   const std::string log = (dir / "run.lcmlog").string(), replayed = (dir / "replayed.lcmlog").string();
-  UDPM_OR_SKIP(r, kBin + " couple launch " + couple_test::kExample + "/scenario.yaml --record " + log +
-                      " --json > /dev/null\n"
-                      "lcm-logger -f " + replayed + " & L=$!\nsleep 0.5\n"
-                      "lcm-logplayer -s 0.25 -e 'WIND|STRUCTURE|CONTROL' " + log +
+  UDPM_OR_SKIP(r, kBin + " couple launch " + shell_quote(couple_test::kExample + "/scenario.yaml") + " --record " +
+                      shell_quote(log) + " --json > /dev/null\n"
+                      "lcm-logger -f " + shell_quote(replayed) + " & L=$!\nsleep 0.5\n"
+                      "lcm-logplayer -s 0.25 -e 'WIND|STRUCTURE|CONTROL' " + shell_quote(log) +
                       "\nsleep 0.5\nkill -INT $L\nwait $L || true\n");
   ASSERT_EQ(r->code, 0) << r->out;
   const ScenarioConfig sc = load_scenario(couple_test::kExample + "/scenario.yaml");
@@ -123,7 +125,8 @@ std::filesystem::path python_scenario(const std::string& tag, const std::string&
 
 TEST(Udpm, AModelProcessThatExitsStopsTheOthersAndTheLogIsKept) {
   const auto d = python_scenario("exit", "sys.exit(3)");
-  UDPM_OR_SKIP(r, kBin + " couple launch " + (d / "scenario.yaml").string() + " --record " + (d / "run.lcmlog").string());
+  UDPM_OR_SKIP(r, kBin + " couple launch " + shell_quote(d / "scenario.yaml") + " --record " +
+                      shell_quote(d / "run.lcmlog"));
   EXPECT_EQ(r->code, 1) << r->out;
   EXPECT_NE(r->out.find("model 'sink' (external program python3) exited with code 3 at step 5"), std::string::npos)
       << r->out;
@@ -135,7 +138,8 @@ TEST(Udpm, AModelProcessThatExitsStopsTheOthersAndTheLogIsKept) {
 
 TEST(Udpm, AStalledModelIsNamedWithTheChannelAndStepOthersWaitFor) {
   const auto d = python_scenario("stall", "time.sleep(1000)");
-  UDPM_OR_SKIP(r, kBin + " couple launch " + (d / "scenario.yaml").string() + " --record " + (d / "run.lcmlog").string());
+  UDPM_OR_SKIP(r, kBin + " couple launch " + shell_quote(d / "scenario.yaml") + " --record " +
+                      shell_quote(d / "run.lcmlog"));
   EXPECT_EQ(r->code, 1) << r->out;
   EXPECT_NE(r->out.find("no model advanced for 2 s"), std::string::npos) << r->out;
   // 'end' waits for the step 'sink' never delivers (5, or an earlier one it missed while
@@ -149,10 +153,10 @@ TEST(Udpm, AStalledModelIsNamedWithTheChannelAndStepOthersWaitFor) {
 
 TEST(Udpm, CtrlCStopsEveryModelCleanlyAndKeepsTheLog) {
   const auto d = python_scenario("sigint", "pass", 100000);  // far too long to finish
-  UDPM_OR_SKIP(r, kBin + " couple launch " + (d / "scenario.yaml").string() + " --record " +
-                      (d / "run.lcmlog").string() + " & P=$!\n"
+  UDPM_OR_SKIP(r, kBin + " couple launch " + shell_quote(d / "scenario.yaml") + " --record " +
+                      shell_quote(d / "run.lcmlog") + " & P=$!\n"
                       // interrupt once the run is well under way (the log has grown)
-                      "for i in $(seq 300); do [ $(stat -c %s " + (d / "run.lcmlog").string() +
+                      "for i in $(seq 300); do [ $(stat -c %s " + shell_quote(d / "run.lcmlog") +
                       " 2>/dev/null || echo 0) -gt 262144 ] && break; sleep 0.1; done\n"
                       "kill -INT $P\nset +e\nwait $P\necho rc=$?\n");
   EXPECT_NE(r->out.find("interrupted"), std::string::npos) << r->out;
@@ -169,11 +173,11 @@ TEST(Udpm, ALauncherKilledBySigkillTakesEveryModelProcessWithIt) {
   // SIGKILL gives the launcher no chance to stop its models; the kernel must (each model
   // process asks for SIGTERM when its parent dies, each external program for SIGKILL).
   const auto d = python_scenario("sigkill", "pass", 100000);  // far too long to finish
-  const std::string pattern = "'[" + d.string().substr(0, 1) + "]" + d.string().substr(1) + "'";
-  UDPM_OR_SKIP(r, kBin + " couple launch " + (d / "scenario.yaml").string() + " --record " +
-                      (d / "run.lcmlog").string() + " > " + (d / "launch.log").string() + " 2>&1 & P=$!\n"
+  const std::string pattern = shell_quote("[" + d.string().substr(0, 1) + "]" + d.string().substr(1));
+  UDPM_OR_SKIP(r, kBin + " couple launch " + shell_quote(d / "scenario.yaml") + " --record " +
+                      shell_quote(d / "run.lcmlog") + " > " + shell_quote(d / "launch.log") + " 2>&1 & P=$!\n"
                       // (its output goes to a file: orphans holding the test's pipe would hang the test)
-                      "for i in $(seq 300); do [ $(stat -c %s " + (d / "run.lcmlog").string() +
+                      "for i in $(seq 300); do [ $(stat -c %s " + shell_quote(d / "run.lcmlog") +
                       " 2>/dev/null || echo 0) -gt 65536 ] && break; sleep 0.1; done\n"
                       "echo models=$(pgrep -fc -- " + pattern + ")\n"
                       "kill -KILL $P\nset +e\nwait $P\n"
@@ -190,10 +194,10 @@ TEST(Udpm, SpyShowsTheLiveChannelsAndSteps) {
   const std::string scenario = couple_test::kExample + "/scenario.yaml";
   const std::string err = (dir / "spy.err").string();
   // The spy runs until Ctrl-C; the models start once it says it is listening.
-  UDPM_OR_SKIP(r, kBin + " couple spy --scenario " + scenario + " --duration 120 --json > " + (dir / "spy.json").string() +
-                      " 2> " + err + " & S=$!\n"
-                      "for i in $(seq 300); do grep -q listening " + err + " && break; sleep 0.1; done\n" +
-                      kBin + " couple launch " + scenario + " > /dev/null\nkill -INT $S\nwait $S\n");
+  UDPM_OR_SKIP(r, kBin + " couple spy --scenario " + shell_quote(scenario) + " --duration 120 --json > " +
+                      shell_quote(dir / "spy.json") + " 2> " + shell_quote(err) + " & S=$!\n"
+                      "for i in $(seq 300); do grep -q listening " + shell_quote(err) + " && break; sleep 0.1; done\n" +
+                      kBin + " couple launch " + shell_quote(scenario) + " > /dev/null\nkill -INT $S\nwait $S\n");
   ASSERT_EQ(r->code, 0) << r->out;
   const json spy = json::parse(std::ifstream(dir / "spy.json"));
   // The run publishes steps 0..5999 on each channel. The spy is a plain UDP multicast listener: on a loaded machine the

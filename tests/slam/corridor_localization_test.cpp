@@ -28,7 +28,7 @@ namespace fs = std::filesystem;
 fs::path corridor(const fs::path& dir, int seed) {
   const fs::path d = dir / ("seed" + std::to_string(seed));
   const auto r = testing::run_cli("synth rgbd --scene corridor-loop --motion robot --seed " + std::to_string(seed) +
-                                  " --first-frame 650 --frames 1300 --out " + d.string());
+                                  " --first-frame 650 --frames 1300 --out " + testing::shell_quote(d));
   EXPECT_EQ(r.exit_code, 0) << r.err;
   return d;
 }

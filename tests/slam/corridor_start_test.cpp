@@ -65,7 +65,8 @@ Result run(const TumDataset& data, const SystemOptions& options) {
 fs::path generate_corridor_start(int seed, const std::string& name, int frames = 600) {
   const fs::path dir = testing::scratch_dir(name);
   const auto r = testing::run_cli("synth rgbd --scene corridor-loop --motion robot --seed " + std::to_string(seed) +
-                                  " --frames " + std::to_string(frames) + " --out " + (dir / "seq").string());
+                                  " --frames " + std::to_string(frames) +
+                                  " --out " + testing::shell_quote(dir / "seq"));
   EXPECT_EQ(r.exit_code, 0) << r.err;
   return dir;
 }

@@ -28,6 +28,7 @@ namespace {
 namespace fs = std::filesystem;
 
 using testing::run_cli;
+using testing::shell_quote;
 
 // BUILTSCENE_SAVED_MAP_DIR names a folder to keep (and reuse) the generated worlds in; without
 // it they go to a scratch folder that the process removes when it exits.
@@ -49,7 +50,7 @@ fs::path world(const std::string& name, int seed, int frames) {
   const fs::path d = work_dir() / name;
   if (!fs::exists(d / "rgb.txt")) {
     const auto r = run_cli("synth rgbd --scene lab-room --motion robot --noise kinect --seed " + std::to_string(seed) +
-                           " --frames " + std::to_string(frames) + " --out " + d.string());
+                           " --frames " + std::to_string(frames) + " --out " + shell_quote(d));
     EXPECT_EQ(r.exit_code, 0) << "synth failed for " << name;
   }
   return d;
@@ -300,8 +301,8 @@ TEST(SavedMapEndToEnd, CommandLineSavesLocalizesAndRejectsBadMaps) {
   const fs::path a = world("a", 1, kMapFrames);
   const auto out = work_dir() / "cli.map";
   // The map's sequence has kMapFrames (70) frames: SLAM mode for 50, then localization.
-  auto r = run_cli("slam --json --dataset " + a.string() + " --trajectory " +
-                   (work_dir() / "cli_traj.txt").string() + " --map-out " + out.string() +
+  auto r = run_cli("slam --json --dataset " + shell_quote(a) + " --trajectory " +
+                   shell_quote(work_dir() / "cli_traj.txt") + " --map-out " + shell_quote(out) +
                    " --mode-schedule 0-49:slam,50-:localize");
   ASSERT_EQ(r.exit_code, 0);
   auto j = nlohmann::json::parse(r.out);
@@ -311,8 +312,8 @@ TEST(SavedMapEndToEnd, CommandLineSavesLocalizesAndRejectsBadMaps) {
   EXPECT_GT(j["map_out"]["keyframes"].get<long>(), 0);
   EXPECT_TRUE(fs::exists(out));
 
-  r = run_cli("localize --json --max-frames 20 --dataset " + a.string() + " --map " + m.path.string() +
-              " --trajectory " + (work_dir() / "loc.txt").string());
+  r = run_cli("localize --json --max-frames 20 --dataset " + shell_quote(a) + " --map " + shell_quote(m.path) +
+              " --trajectory " + shell_quote(work_dir() / "loc.txt"));
   ASSERT_EQ(r.exit_code, 0);
   j = nlohmann::json::parse(r.out);
   for (const char* key : {"frames", "tracked_frames", "lost_frames", "relocalizations", "first_relocalized_frame", "fps",
@@ -326,8 +327,8 @@ TEST(SavedMapEndToEnd, CommandLineSavesLocalizesAndRejectsBadMaps) {
   // first camera's forward axis), localization beyond. The truth: the first frame whose true
   // position, relative to the first camera, is more than 0.8 m ahead; the switch happens on
   // the frame after it (the rule looks at the last tracked pose).
-  r = run_cli("slam --json --max-frames 90 --dataset " + a.string() + " --trajectory " +
-              (work_dir() / "region_traj.txt").string() + " --slam-region -1,-1,1,0.8 --world camera");
+  r = run_cli("slam --json --max-frames 90 --dataset " + shell_quote(a) + " --trajectory " +
+              shell_quote(work_dir() / "region_traj.txt") + " --slam-region -1,-1,1,0.8 --world camera");
   ASSERT_EQ(r.exit_code, 0);
   j = nlohmann::json::parse(r.out);
   const auto gt = TumDataset::open(a).groundtruth();
@@ -342,11 +343,11 @@ TEST(SavedMapEndToEnd, CommandLineSavesLocalizesAndRejectsBadMaps) {
 
   const auto bad = work_dir() / "bad.map";
   { std::ofstream(bad) << "not a map"; }
-  r = run_cli("localize --dataset " + a.string() + " --map " + bad.string());
+  r = run_cli("localize --dataset " + shell_quote(a) + " --map " + shell_quote(bad));
   EXPECT_EQ(r.exit_code, 2);
-  r = run_cli("slam --dataset " + a.string() + " --trajectory /dev/null --map-in " + bad.string());
+  r = run_cli("slam --dataset " + shell_quote(a) + " --trajectory /dev/null --map-in " + shell_quote(bad));
   EXPECT_EQ(r.exit_code, 2);
-  r = run_cli("slam --dataset " + a.string() + " --trajectory /dev/null --mode-schedule 5-1:slam");
+  r = run_cli("slam --dataset " + shell_quote(a) + " --trajectory /dev/null --mode-schedule 5-1:slam");
   EXPECT_EQ(r.exit_code, 2);
 }
 

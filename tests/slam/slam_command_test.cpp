@@ -19,6 +19,7 @@ namespace fs = std::filesystem;
 const fs::path kKitchen = fs::path(BUILTSCENE_SOURCE_DIR) / "../shared/data/7scenes-kitchen";
 
 using builtscene::testing::run_cli;
+using builtscene::testing::shell_quote;
 
 std::vector<std::string> lines_of(const fs::path& f) {
   std::ifstream in(f);
@@ -88,7 +89,8 @@ TEST_F(SlamCommand, BadInputIsCountedNotFatal) {
     for (auto& l : depth) d << l << "\n";
   }
 
-  const auto r = run_cli("slam --dataset " + dir.string() + " --trajectory " + (dir / "traj.txt").string() + " --json");
+  const auto r =
+      run_cli("slam --dataset " + shell_quote(dir) + " --trajectory " + shell_quote(dir / "traj.txt") + " --json");
   ASSERT_EQ(r.exit_code, 0) << r.out;
   const auto j = nlohmann::json::parse(r.out);
   EXPECT_EQ(j["frames"], 30);
@@ -110,8 +112,8 @@ TEST_F(SlamCommand, BadInputIsCountedNotFatal) {
 TEST_F(SlamCommand, SynchronousMappingTracksAndMaps) {
   if (!fs::exists(kKitchen / "rgb.txt")) GTEST_SKIP() << "7scenes-kitchen not found at " << kKitchen;
   copy_kitchen(20);
-  const auto r = run_cli("slam --dataset " + dir.string() + " --trajectory " + (dir / "traj.txt").string() +
-                     " --keyframes " + (dir / "kf.txt").string() + " --sync-mapping --max-frames 15 --json");
+  const auto r = run_cli("slam --dataset " + shell_quote(dir) + " --trajectory " + shell_quote(dir / "traj.txt") +
+                     " --keyframes " + shell_quote(dir / "kf.txt") + " --sync-mapping --max-frames 15 --json");
   ASSERT_EQ(r.exit_code, 0) << r.out;
   const auto j = nlohmann::json::parse(r.out);
   EXPECT_EQ(j["frames"], 15);
@@ -122,13 +124,15 @@ TEST_F(SlamCommand, SynchronousMappingTracksAndMaps) {
 }
 
 TEST_F(SlamCommand, MissingDatasetIsUsageError) {
-  const auto r = run_cli("slam --dataset " + (dir / "nope").string() + " --trajectory " + (dir / "t.txt").string());
+  const auto r =
+      run_cli("slam --dataset " + shell_quote(dir / "nope") + " --trajectory " + shell_quote(dir / "t.txt"));
   EXPECT_EQ(r.exit_code, 2);
 }
 
 TEST_F(SlamCommand, BadPriorAndLinkValuesAreUsageErrorsNamingTheFlag) {
   // Checked before the dataset is opened (this one does not exist): the flag is the fault.
-  const std::string base = "slam --dataset " + (dir / "nope").string() + " --trajectory " + (dir / "t.txt").string();
+  const std::string base =
+      "slam --dataset " + shell_quote(dir / "nope") + " --trajectory " + shell_quote(dir / "t.txt");
   for (const auto& [args, flag] : {std::pair{" --motion-prior -1", "--motion-prior"},
                                    std::pair{" --motion-prior 1 --motion-prior-deg nan", "--motion-prior-deg"},
                                    std::pair{" --depth-links --depth-link-weight 0", "--depth-link-weight"},
@@ -166,7 +170,8 @@ TEST_F(SlamCommand, AllBlankFramesNeverInitializeButDoNotCrash) {
   }
   rgb.close();
   depth.close();
-  const auto r = run_cli("slam --dataset " + dir.string() + " --trajectory " + (dir / "traj.txt").string() + " --json");
+  const auto r =
+      run_cli("slam --dataset " + shell_quote(dir) + " --trajectory " + shell_quote(dir / "traj.txt") + " --json");
   ASSERT_EQ(r.exit_code, 0) << r.out;
   const auto j = nlohmann::json::parse(r.out);
   EXPECT_EQ(j["tracked_frames"], 0);
