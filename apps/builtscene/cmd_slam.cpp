@@ -52,6 +52,7 @@ struct SlamOptions {
   int global_ba_iterations = slam::LoopClosingOptions{}.global_ba_iterations;
   bool no_final_ba = false;
   bool no_close_at_end = false;
+  bool adaptive_ba_disparity = false;
   double bridge_link_cm = slam::BridgeLinkOptions{}.sigma_m * 100.0;
   double bridge_link_deg = slam::BridgeLinkOptions{}.sigma_deg;
   double min_parallax_sigmas = slam::LocalMappingOptions{}.min_parallax_sigmas;
@@ -107,6 +108,7 @@ nlohmann::json run_slam(const SlamOptions& opt) {
   so.loop.global_ba_iterations = opt.global_ba_iterations;
   so.loop.final_bundle_adjustment = !opt.no_final_ba;
   so.loop.close_at_end = !opt.no_close_at_end;
+  so.mapping.ba_disparity.adaptive = opt.adaptive_ba_disparity;
   so.loop.bridge_links.sigma_m = opt.bridge_link_cm / 100.0;
   so.loop.bridge_links.sigma_deg = opt.bridge_link_deg;
   so.mapping.min_parallax_sigmas = opt.min_parallax_sigmas;
@@ -246,6 +248,12 @@ nlohmann::json run_slam(const SlamOptions& opt) {
         {"points_triangulated", stats.points_triangulated},
         {"bundle_adjustments", stats.bundle_adjustments},
         {"bundle_adjustments_aborted", stats.bundle_adjustments_aborted},
+        {"bundle_adjustments_measured_disparity", stats.bundle_adjustments_measured_disparity},
+        {"bundle_adjustments_not_held", stats.bundle_adjustments_not_held},
+        {"ba_disparity_sigma_mean", stats.bundle_adjustments_measured_disparity > 0
+                                        ? stats.ba_disparity_sigma_sum /
+                                              static_cast<double>(stats.bundle_adjustments_measured_disparity)
+                                        : 0.0},
         {"max_queue", stats.max_queue}}},
       {"relocalizations",
        {{"count", relocalized.size()}, {"frames", relocalized}, {"attempts", system.relocalization_attempts()}}},
@@ -393,6 +401,10 @@ const bool registered_slam = register_command({
                    "Do not close a loop at the end of the run whose place was recognised on every keyframe but one "
                    "too few to be confirmed (it still passes every geometric check; docs/slam.md, \"The loop at "
                    "the end of a run\")");
+      cmd.add_flag("--adaptive-ba-disparity", opt->adaptive_ba_disparity,
+                   "Local bundle adjustment weighs the depth readings at 1.6 times the noise its window's readings "
+                   "show (0.1 px to DisparitySigma) where every free keyframe is held through shared points "
+                   "(docs/slam.md, \"Local bundle adjustment at the noise its window shows\")");
       cmd.add_option("--bridge-link-cm", opt->bridge_link_cm,
                      "Global BA holds the pose between the keyframes either side of a stretch the depth odometry "
                      "carried (a featureless turn) to its value after the pose graph, with this standard deviation "

@@ -48,10 +48,11 @@ struct RgbdCameraSettings {
   // from 6.83 to 5.29 cm and its markers from 9 to 12 of 15 tags within 5 cm, but one of three
   // generated offices from 4.0 to 12.2 cm.
   double global_ba_disparity_sigma = 0.0;
-  // The same in local bundle adjustment. [LocalBADisparitySigma], pixels; 0 = DisparitySigma
-  // (the default). 0.1 with GlobalBADisparitySigma 0.1 gave the generated corridor's markers
-  // 14 of 15 tags within 5 cm, but a generated office 5.4 -> 12.9 cm and the real kitchen
-  // 4.41 -> 5.41 cm (docs/slam.md, same section).
+  // The same in local bundle adjustment, fixed. [LocalBADisparitySigma], pixels; 0 (the
+  // default) = DisparitySigma, or with `slam --adaptive-ba-disparity` the noise each local BA's
+  // window shows where the window is held (slam/local_ba_disparity.hpp). A fixed 0.1 with GlobalBADisparitySigma
+  // 0.1 gave the generated corridor's markers 14 of 15 tags within 5 cm, but a generated office
+  // 5.4 -> 12.9 cm and the real kitchen 4.41 -> 5.41 cm (docs/slam.md, same section).
   double local_ba_disparity_sigma = 0.0;
   // Keypoint depth readings beyond this many metres are not used: such keypoints are treated
   // as having no depth (triangulated like a monocular camera's). A structured-light sensor's

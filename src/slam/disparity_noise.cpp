@@ -6,12 +6,18 @@
 
 namespace builtscene::slam {
 
-DisparityNoise estimate_disparity_noise(const BundleAdjustmentProblem& pb, int min_readings) {
+DisparityNoise estimate_disparity_noise(const BundleAdjustmentProblem& pb, int min_readings, int min_reads_per_point) {
+  std::vector<int> reads(pb.points.size(), 0);
+  if (min_reads_per_point > 1)
+    for (const auto& m : pb.measurements)
+      if (m.o.stereo() && m.point >= 0 && static_cast<std::size_t>(m.point) < reads.size())
+        ++reads[static_cast<std::size_t>(m.point)];
   std::vector<double> residuals;
   for (const auto& m : pb.measurements) {
     if (!m.o.stereo()) continue;
     const auto c = static_cast<std::size_t>(m.camera), p = static_cast<std::size_t>(m.point);
     if (c >= pb.cameras.size() || p >= pb.points.size()) continue;
+    if (min_reads_per_point > 1 && reads[p] < min_reads_per_point) continue;
     const Eigen::Vector3d pc = pb.cameras[c].T_cw * pb.points[p];
     if (!(pc.z() > 1e-6)) continue;
     residuals.push_back(std::abs(disparity_residual(pb.K, m.o, pc)));

@@ -17,6 +17,10 @@ struct DisparityNoise {
   double sigma = 0;   // pixels; 0 when fewer than `min_readings`
 };
 
-DisparityNoise estimate_disparity_noise(const BundleAdjustmentProblem& problem, int min_readings = 100);
+// `min_reads_per_point` > 1 counts only the readings of points read by at least that many
+// cameras of the problem: a point made from one camera's reading agrees with it exactly (a
+// zero residual that says nothing about the sensor) until another reading joins it.
+DisparityNoise estimate_disparity_noise(const BundleAdjustmentProblem& problem, int min_readings = 100,
+                                        int min_reads_per_point = 1);
 
 }  // namespace builtscene::slam

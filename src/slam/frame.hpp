@@ -31,7 +31,7 @@ struct FrameContext {
   double th_depth = 3.0;   // metres: closer keypoints are "close" (reliable depth)
   double disparity_sigma = 0;  // pixels; 0 = ORB-SLAM's u_right residual (see RgbdCameraSettings)
   double global_ba_disparity_sigma = 0;  // pixels, in global bundle adjustment; 0 = disparity_sigma
-  double local_ba_disparity_sigma = 0;   // pixels, in local bundle adjustment; 0 = disparity_sigma
+  double local_ba_disparity_sigma = 0;   // pixels, in local bundle adjustment, fixed; 0 = disparity_sigma or local_ba_disparity.hpp's rule
   double max_depth = 0;        // metres: keypoint depth readings beyond are not used (0 = no limit)
   double far_depth = 0;        // metres: readings beyond place points but give no disparity residual (0 = none)
   ScalePyramid pyramid;

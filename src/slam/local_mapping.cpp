@@ -454,11 +454,22 @@ void LocalMapping::local_bundle_adjustment(KeyFrame& kf) {
     planes = add_plane_terms(cams, pb, opt_.planes, opt_.planes.anchors);
   }
   if (abort_ba_) return;
+  LocalBADisparityChoice disparity;
+  disparity.sigma = pb.K.disparity_sigma;
+  if (!(kf.f->ctx->local_ba_disparity_sigma > 0)) {
+    disparity = choose_local_ba_disparity_sigma(pb, opt_.ba_disparity);
+    pb.K.disparity_sigma = disparity.sigma;
+  }
   const auto r = solve_bundle_adjustment(pb, {}, &abort_ba_);
   {
     std::lock_guard s(stats_mutex_);
     ++stats_.bundle_adjustments;
     stats_.bundle_adjustments_aborted += r.aborted;
+    stats_.bundle_adjustments_not_held += !disparity.held;
+    if (disparity.measured > 0) {
+      ++stats_.bundle_adjustments_measured_disparity;
+      stats_.ba_disparity_sigma_sum += disparity.sigma;
+    }
   }
   if (!r.solved) return;
   std::lock_guard lock(map_.mutex());

@@ -20,6 +20,7 @@
 #include <thread>
 
 #include "core/stage_timer.hpp"
+#include "slam/local_ba_disparity.hpp"
 #include "slam/tracking.hpp"
 
 namespace builtscene::slam {
@@ -52,6 +53,9 @@ struct LocalMappingOptions {
   // Local BA window: the new keyframe and its most covisible neighbours (ORB-SLAM takes all
   // covisible keyframes; with Ceres on two cores that makes BA seconds long on dense maps).
   int ba_window = 10;
+  // The disparity sigma of each local BA: the window's measured noise where the window is held
+  // (local_ba_disparity.hpp; off by default, and where the camera file sets LocalBADisparitySigma).
+  LocalBADisparityOptions ba_disparity;
 };
 
 // ORB-SLAM's keyframe culling rule: a keyframe is redundant when at least `ratio` of its map
@@ -100,6 +104,9 @@ class LocalMapping : public KeyFrameSink {
     long points_triangulated = 0;
     long bundle_adjustments = 0;
     long bundle_adjustments_aborted = 0;
+    long bundle_adjustments_measured_disparity = 0;  // weighed readings tighter than DisparitySigma
+    long bundle_adjustments_not_held = 0;            // kept DisparitySigma: a free camera held by too few shared points
+    double ba_disparity_sigma_sum = 0;               // over the BAs with a measured sigma (for the mean)
     std::size_t max_queue = 0;
   };
   Stats stats() const;
