@@ -104,7 +104,7 @@ class LocalMapping : public KeyFrameSink {
     long points_triangulated = 0;
     long bundle_adjustments = 0;
     long bundle_adjustments_aborted = 0;
-    long bundle_adjustments_measured_disparity = 0;  // weighed readings tighter than DisparitySigma
+    long bundle_adjustments_measured_disparity = 0;  // weighed at a measured sigma (0.1 px .. DisparitySigma)
     long bundle_adjustments_not_held = 0;            // kept DisparitySigma: a free camera held by too few shared points
     double ba_disparity_sigma_sum = 0;               // over the BAs with a measured sigma (for the mean)
     std::size_t max_queue = 0;
