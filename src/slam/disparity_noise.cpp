@@ -7,11 +7,13 @@
 namespace builtscene::slam {
 
 DisparityNoise estimate_disparity_noise(const BundleAdjustmentProblem& pb, int min_readings, int min_reads_per_point) {
-  std::vector<int> reads(pb.points.size(), 0);
-  if (min_reads_per_point > 1)
+  std::vector<int> reads;  // stereo measurements per point, counted only when asked for
+  if (min_reads_per_point > 1) {
+    reads.assign(pb.points.size(), 0);
     for (const auto& m : pb.measurements)
       if (m.o.stereo() && m.point >= 0 && static_cast<std::size_t>(m.point) < reads.size())
         ++reads[static_cast<std::size_t>(m.point)];
+  }
   std::vector<double> residuals;
   for (const auto& m : pb.measurements) {
     if (!m.o.stereo()) continue;

@@ -2,10 +2,10 @@
 
 #include <algorithm>
 #include <map>
-#include <numeric>
 #include <utility>
 #include <vector>
 
+#include "core/disjoint_sets.hpp"
 #include "slam/disparity_noise.hpp"
 
 namespace builtscene::slam {
@@ -24,22 +24,17 @@ bool free_cameras_held_by_fixed(const BundleAdjustmentProblem& pb, int min_share
     for (std::size_t a = 0; a < cams.size(); ++a)
       for (std::size_t b = a + 1; b < cams.size(); ++b) ++shared[{cams[a], cams[b]}];
   }
-  std::vector<std::size_t> parent(nc);
-  std::iota(parent.begin(), parent.end(), std::size_t{0});
-  auto root = [&](std::size_t x) {
-    while (parent[x] != x) x = parent[x] = parent[parent[x]];
-    return x;
-  };
+  DisjointSets groups(nc);
   for (const auto& [pair, n] : shared)
-    if (n >= min_shared_points)
-      parent[root(static_cast<std::size_t>(pair.first))] = root(static_cast<std::size_t>(pair.second));
+    if (n >= min_shared_points) groups.join(pair.first, pair.second);
+  auto group_of = [&](std::size_t c) { return static_cast<std::size_t>(groups.find(static_cast<int>(c))); };
   std::vector<char> group_has_fixed(nc, 0);
   bool any_fixed = false;
   for (std::size_t c = 0; c < nc; ++c)
-    if (pb.cameras[c].fixed) group_has_fixed[root(c)] = 1, any_fixed = true;
+    if (pb.cameras[c].fixed) group_has_fixed[group_of(c)] = 1, any_fixed = true;
   if (!any_fixed) return false;
   for (std::size_t c = 0; c < nc; ++c)
-    if (!pb.cameras[c].fixed && !group_has_fixed[root(c)]) return false;
+    if (!pb.cameras[c].fixed && !group_has_fixed[group_of(c)]) return false;
   return true;
 }
 

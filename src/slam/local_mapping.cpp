@@ -454,8 +454,7 @@ void LocalMapping::local_bundle_adjustment(KeyFrame& kf) {
     planes = add_plane_terms(cams, pb, opt_.planes, opt_.planes.anchors);
   }
   if (abort_ba_) return;
-  LocalBADisparityChoice disparity;
-  disparity.sigma = pb.K.disparity_sigma;
+  LocalBADisparityChoice disparity;  // not measured, held: the stats count nothing
   if (!(kf.f->ctx->local_ba_disparity_sigma > 0)) {
     disparity = choose_local_ba_disparity_sigma(pb, opt_.ba_disparity);
     pb.K.disparity_sigma = disparity.sigma;
