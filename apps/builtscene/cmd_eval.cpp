@@ -1,10 +1,14 @@
 // `builtscene eval ate` and `builtscene eval rpe`: trajectory accuracy against ground truth.
+#include <filesystem>
+#include <fstream>
 #include <iostream>
 #include <memory>
+#include <optional>
 
 #include "command_registry.hpp"
 #include "core/errors.hpp"
 #include "core/logging.hpp"
+#include "eval/marker_detection_error.hpp"
 #include "eval/marker_evaluation.hpp"
 #include "eval/trajectory_error.hpp"
 
@@ -80,12 +84,29 @@ nlohmann::json run_rpe(const TrajectoryPairOptions& o) {
 
 struct MarkerEvalOptions {
   std::string measured, truth, align = "3d", out;
+  std::vector<std::string> camera_truth;  // {LOCALIZED, TRUE}: split off the detection's own error
 };
 
 nlohmann::json run_markers(const MarkerEvalOptions& o) {
   const auto measured = read_marker_measurements(o.measured);
   const auto truth = read_marker_truth(o.truth);
   if (measured.empty()) throw InputError(o.measured + ": no marker measurements");
+  // --camera-truth: worked out before anything is printed, so its bad input gives one line.
+  std::optional<MarkerDetectionErrors> detection;
+  if (!o.camera_truth.empty()) {
+    const std::string& localized = o.camera_truth[0];
+    const std::string& true_poses = o.camera_truth[1];
+    try {
+      detection = marker_detection_errors(measured, truth, read_tum_trajectory(localized), read_tum_trajectory(true_poses));
+    } catch (const InputError& err) {
+      const std::string what = err.what();  // a trajectory file's own error names it already
+      if (what.find(localized) != std::string::npos || what.find(true_poses) != std::string::npos) throw;
+      throw InputError(o.measured + " with --camera-truth " + localized + " " + true_poses + ": " + what);
+    }
+    if (detection->without_pose > 0)
+      spdlog::warn("{}: {} measurements have no pose in {} or {} (within 0.02 s) and are left out of the detection error",
+                   o.measured, detection->without_pose, localized, true_poses);
+  }
   const MarkerEvaluation e = evaluate_markers(measured, truth, parse_marker_alignment(o.align));
   for (int id : e.unknown_ids) spdlog::warn("{}: marker id {} is not in {}; its measurements are ignored", o.measured, id, o.truth);
   for (int id : e.unseen_ids) spdlog::warn("marker {} of {} was never measured", id, o.truth);
@@ -96,7 +117,14 @@ nlohmann::json run_markers(const MarkerEvalOptions& o) {
   std::cerr << markers_markdown(e);
   spdlog::info("{} measurements of {} markers: max position RMSE {:.3f} m, max distance RMSE {:.3f} m", e.measurements_used,
                e.markers.size() - e.unseen_ids.size(), e.max_rmse, e.max_distance_rmse);
-  return to_json(e);
+  nlohmann::json j = to_json(e);
+  if (detection) {
+    std::cerr << "\n" << detection_markdown(*detection);
+    spdlog::info("detection alone (true camera poses): max RMSE {:.4f} m over {} measurements", detection->max_rmse, detection->used);
+    if (!o.out.empty()) std::ofstream(std::filesystem::path(o.out) / "detection.md") << detection_markdown(*detection);
+    j["detection"] = to_json(*detection);
+  }
+  return j;
 }
 
 const bool group_eval = register_group("eval", "Accuracy evaluation against ground truth");
@@ -140,6 +168,11 @@ const bool markers = register_command({
       cmd.add_option("--truth", o->truth, "Surveyed markers: id,x,y,z[,yaw,size]")->required();
       cmd.add_option("--align", o->align, "Map-to-marker alignment: 3d, 2d or none")->capture_default_str();
       cmd.add_option("--out", o->out, "Folder for markers.md, the CSV tables and markers.png");
+      cmd.add_option("--camera-truth", o->camera_truth,
+                     "LOCALIZED TRUE: the trajectory the measurements were made with (localize --trajectory) and the "
+                     "camera's true poses in the survey's frame (a generated world's groundtruth.txt): also report each "
+                     "marker's error with the true poses, the detection's own")
+          ->expected(2);
       return [o] { return run_markers(*o); };
     },
     .order = 62});
