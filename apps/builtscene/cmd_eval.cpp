@@ -96,12 +96,11 @@ nlohmann::json run_markers(const MarkerEvalOptions& o) {
   if (!o.camera_truth.empty()) {
     const std::string& localized = o.camera_truth[0];
     const std::string& true_poses = o.camera_truth[1];
+    const Trajectory localized_poses = read_tum_trajectory(localized), true_camera_poses = read_tum_trajectory(true_poses);
     try {
-      detection = marker_detection_errors(measured, truth, read_tum_trajectory(localized), read_tum_trajectory(true_poses));
+      detection = marker_detection_errors(measured, truth, localized_poses, true_camera_poses);
     } catch (const InputError& err) {
-      const std::string what = err.what();  // a trajectory file's own error names it already
-      if (what.find(localized) != std::string::npos || what.find(true_poses) != std::string::npos) throw;
-      throw InputError(o.measured + " with --camera-truth " + localized + " " + true_poses + ": " + what);
+      throw InputError(o.measured + " with --camera-truth " + localized + " " + true_poses + ": " + err.what());
     }
     if (detection->without_pose > 0)
       spdlog::warn("{}: {} measurements have no pose in {} or {} (within 0.02 s) and are left out of the detection error",

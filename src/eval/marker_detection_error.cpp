@@ -4,30 +4,26 @@
 #include <cmath>
 #include <iomanip>
 #include <map>
-#include <optional>
 #include <sstream>
 
 #include "core/errors.hpp"
+#include "eval/trajectory_error.hpp"
 
 namespace builtscene {
 namespace {
 
-// The pose whose timestamp is nearest `t`, if within max_difference. `order` sorts `traj` by time.
-std::optional<SE3> pose_at(const Trajectory& traj, const std::vector<std::size_t>& order, double t, double max_difference) {
-  const auto it = std::lower_bound(order.begin(), order.end(), t,
-                                   [&](std::size_t i, double v) { return traj[i].timestamp < v; });
-  std::optional<std::size_t> best;
-  if (it != order.end()) best = *it;
-  if (it != order.begin() && (!best || t - traj[*std::prev(it)].timestamp < traj[*best].timestamp - t)) best = *std::prev(it);
-  if (!best || std::abs(traj[*best].timestamp - t) > max_difference) return std::nullopt;
-  return traj[*best].pose;
-}
+// A localized frame with its true pose (the two trajectories associated as for `eval ate`).
+struct PosePair {
+  double time;
+  SE3 localized, truth;
+};
 
-std::vector<std::size_t> time_order(const Trajectory& traj) {
-  std::vector<std::size_t> order(traj.size());
-  for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
-  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return traj[a].timestamp < traj[b].timestamp; });
-  return order;
+// The pair whose time is nearest `t`, if within max_difference. `pairs` is sorted by time.
+const PosePair* pair_at(const std::vector<PosePair>& pairs, double t, double max_difference) {
+  const auto it = std::lower_bound(pairs.begin(), pairs.end(), t, [](const PosePair& p, double v) { return p.time < v; });
+  const PosePair* best = it != pairs.end() ? &*it : nullptr;
+  if (it != pairs.begin() && (!best || t - std::prev(it)->time < best->time - t)) best = &*std::prev(it);
+  return best && std::abs(best->time - t) <= max_difference ? best : nullptr;
 }
 
 }  // namespace
@@ -37,7 +33,10 @@ MarkerDetectionErrors marker_detection_errors(const std::vector<MarkerMeasuremen
                                               const Trajectory& truth, double max_difference) {
   std::map<int, Eigen::Vector3d> surveyed;
   for (const auto& s : survey) surveyed[s.id] = s.position;
-  const auto loc_order = time_order(localized), truth_order = time_order(truth);
+  std::vector<PosePair> pairs;
+  for (const auto& [it, il] : associate_trajectories(truth, localized, max_difference))
+    pairs.push_back({localized[il].timestamp, localized[il].pose, truth[it].pose});
+  std::sort(pairs.begin(), pairs.end(), [](const PosePair& a, const PosePair& b) { return a.time < b.time; });
   struct Sum {
     std::size_t n = 0;
     Eigen::Vector3d sum = Eigen::Vector3d::Zero();
@@ -48,13 +47,12 @@ MarkerDetectionErrors marker_detection_errors(const std::vector<MarkerMeasuremen
   for (const auto& m : measured) {
     const auto s = surveyed.find(m.id);
     if (s == surveyed.end()) continue;
-    const auto T_loc = pose_at(localized, loc_order, m.time, max_difference);
-    const auto T_true = T_loc ? pose_at(truth, truth_order, m.time, max_difference) : std::nullopt;
-    if (!T_loc || !T_true) {
+    const PosePair* poses = pair_at(pairs, m.time, max_difference);
+    if (!poses) {
       ++d.without_pose;
       continue;
     }
-    const Eigen::Vector3d e = *T_true * (T_loc->inverse() * m.position) - s->second;
+    const Eigen::Vector3d e = poses->truth * (poses->localized.inverse() * m.position) - s->second;
     Sum& a = sums[m.id];
     ++a.n;
     a.sum += e;

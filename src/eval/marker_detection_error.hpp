@@ -30,9 +30,10 @@ struct MarkerDetectionErrors {
 };
 
 // `localized`: the trajectory the measurements were made with (localize --trajectory, map
-// frame); `truth`: the true camera poses in the survey's frame. A measurement's frame is found by
-// nearest timestamp within max_difference seconds in each. Measurements of ids the survey lacks
-// are skipped. Throws InputError when no measurement has a pose in both trajectories.
+// frame); `truth`: the true camera poses in the survey's frame. The two are associated as for
+// `eval ate` (associate_trajectories), and a measurement takes the associated frame nearest its
+// time, within max_difference seconds. Measurements of ids the survey lacks are skipped. Throws
+// InputError when no measurement has a pose in both trajectories.
 MarkerDetectionErrors marker_detection_errors(const std::vector<MarkerMeasurement>& measured,
                                               const std::vector<MarkerTruth>& survey, const Trajectory& localized,
                                               const Trajectory& truth, double max_difference = 0.02);
