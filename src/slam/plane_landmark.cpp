@@ -4,7 +4,7 @@
 #include <cmath>
 #include <unordered_map>
 
-#include "core/disjoint_sets.hpp"
+#include "slam/camera_groups.hpp"
 #include "slam/key_frame.hpp"
 #include "slam/local_bundle_adjuster.hpp"
 #include "slam/map.hpp"
@@ -94,22 +94,16 @@ std::vector<std::shared_ptr<MapPlane>> add_plane_terms(std::vector<std::shared_p
   // common motion, so a group of hundreds of keyframes is still shaped by its points.
   {
     const std::size_t n = pb.cameras.size();
-    DisjointSets groups(n);
-    std::unordered_map<int, int> first_camera;  // per point
-    for (const auto& m : pb.measurements)
-      if (const auto [it, fresh] = first_camera.emplace(m.point, m.camera); !fresh) groups.join(m.camera, it->second);
-    for (const auto& rp : pb.relative_poses) groups.join(rp.i, rp.j);
-    std::vector<std::size_t> group_of(n);
-    std::vector<char> anchored(n, 0);
-    std::vector<int> size(n, 0);
-    for (std::size_t c = 0; c < n; ++c) {
-      const auto g = group_of[c] = static_cast<std::size_t>(groups.find(static_cast<int>(c)));
-      if (pb.cameras[c].fixed) anchored[g] = 1;
-      else ++size[g];
-    }
+    DisjointSets groups = camera_groups(pb, 1, /*by_relative_poses=*/true);
+    const auto held = held_by_fixed_camera(pb, groups);
+    std::vector<int> size(n, 0);  // free cameras per group
     for (std::size_t c = 0; c < n; ++c)
-      if (!pb.cameras[c].fixed && !anchored[group_of[c]])
-        pb.held_in_place.push_back({static_cast<int>(c), hold_groups_as_a_whole ? size[group_of[c]] : 1});
+      if (!pb.cameras[c].fixed) ++size[static_cast<std::size_t>(groups.find(static_cast<int>(c)))];
+    for (std::size_t c = 0; c < n; ++c)
+      if (!pb.cameras[c].fixed && !held[c])
+        pb.held_in_place.push_back({static_cast<int>(c), hold_groups_as_a_whole
+                                                             ? size[static_cast<std::size_t>(groups.find(static_cast<int>(c)))]
+                                                             : 1});
   }
   pb.plane_sigma_rad = opt.sigma_rad;
   pb.plane_sigma_m = opt.sigma_m;
